@@ -1,0 +1,60 @@
+"""The ``rigtools`` command line.
+
+One module per subcommand, each with ``add_parser(subparsers)`` and ``run(args) -> int``.
+
+Exit codes:
+
+====  ======================================================================
+0     done; if anything was lost (rejected frames, gaps), a warning on stderr
+2     usage error (bad arguments)
+3     the input is unusable: a rigtools error names the file, position and cause
+====  ======================================================================
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from rigtools import __version__
+from rigtools.cli import demo, info, ingest
+from rigtools.errors import RigtoolsError
+
+__all__ = ["EXIT_OK", "EXIT_UNUSABLE", "EXIT_USAGE", "main"]
+
+EXIT_OK = 0
+EXIT_USAGE = 2
+EXIT_UNUSABLE = 3
+
+_SUBCOMMANDS = (ingest, info, demo)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every subcommand registered."""
+    parser = argparse.ArgumentParser(
+        prog="rigtools",
+        description="Spur-gear test-rig recordings: ingest, inspect, analyse.",
+    )
+    parser.add_argument("--version", action="version", version=f"rigtools {__version__}")
+    parser.add_argument("--debug", action="store_true", help="re-raise errors with a traceback")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for module in _SUBCOMMANDS:
+        module.add_parser(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``rigtools`` console script."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args))
+    except RigtoolsError as exc:
+        if args.debug:
+            raise
+        print(f"rigtools: error: {exc}", file=sys.stderr)
+        return EXIT_UNUSABLE
+    except KeyboardInterrupt:
+        print("rigtools: interrupted", file=sys.stderr)
+        return 130

@@ -1,0 +1,128 @@
+"""``rigtools info FILE``: channels, rates, duration, counts and gaps of a recording."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from typing import Any
+
+import numpy as np
+
+from rigtools.cli._common import add_read_options, read_from_args, warn_losses
+from rigtools.ingest import Recording
+
+__all__ = ["add_parser", "format_info", "run"]
+
+
+def add_parser(subparsers: Any) -> None:
+    """Register the subcommand."""
+    p = subparsers.add_parser(
+        "info",
+        help="print channels, rates, duration, counts and gaps of a recording",
+        description="Read a recording (any supported format, or a normalized .parquet) and "
+        "print what it holds and what was lost.",
+    )
+    p.add_argument("file", help="recording file")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    add_read_options(p)
+    p.set_defaults(func=run)
+
+
+def summary(rec: Recording) -> dict[str, Any]:
+    """JSON-ready summary of a recording."""
+    rep = rec.report
+    return {
+        "source": rec.provenance.source_path,
+        "sha256": rec.provenance.source_sha256,
+        "reader": rec.provenance.reader,
+        "duration_s": rec.duration_s,
+        "channels": [
+            {
+                "name": c.name,
+                "unit": c.unit,
+                "sample_rate_Hz": c.sample_rate_Hz,
+                "n_samples": len(c),
+                "n_valid": int(np.count_nonzero(c.valid)),
+                "duration_s": c.duration_s,
+                "start_time_s": c.start_time_s,
+            }
+            for c in rec.channels.values()
+        ],
+        "slow": [
+            {
+                "name": s.name,
+                "unit": s.unit,
+                "n_points": len(s),
+                "min": float(np.nanmin(s.values)) if len(s) else None,
+                "max": float(np.nanmax(s.values)) if len(s) else None,
+            }
+            for s in rec.slow.values()
+        ],
+        "metadata": rec.metadata.to_dict(),
+        "report": rep.to_dict(),
+    }
+
+
+def format_info(rec: Recording) -> str:
+    """Human-readable summary."""
+    s = summary(rec)
+    rep = rec.report
+    lines = [
+        f"source    {s['source']}",
+        f"sha256    {s['sha256']}",
+        f"reader    {s['reader']}",
+        f"duration  {s['duration_s']:.3f} s",
+    ]
+    md = rec.metadata
+    if md.run_id or md.rig or md.gear_set or md.conditions:
+        cond = ", ".join(f"{k}={v:g}" for k, v in md.conditions.items())
+        lines.append(f"run       {md.run_id or '-'}  rig {md.rig or '-'}  gear set "
+                     f"{md.gear_set or '-'}  {cond}")
+    lines.append("")
+    lines.append(f"{'channel':<28}{'unit':<10}{'rate Hz':>12}{'samples':>12}{'valid':>12}"
+                 f"{'duration s':>12}")
+    for c in s["channels"]:
+        lines.append(f"{c['name']:<28}{c['unit']:<10}{c['sample_rate_Hz']:>12g}"
+                     f"{c['n_samples']:>12}{c['n_valid']:>12}{c['duration_s']:>12.3f}")
+    if s["slow"]:
+        lines.append("")
+        lines.append(f"{'slow signal':<28}{'unit':<10}{'points':>12}{'min':>12}{'max':>12}")
+        for x in s["slow"]:
+            lo = "-" if x["min"] is None else f"{x['min']:.4g}"
+            hi = "-" if x["max"] is None else f"{x['max']:.4g}"
+            lines.append(f"{x['name']:<28}{x['unit']:<10}{x['n_points']:>12}{lo:>12}{hi:>12}")
+    lines.append("")
+    lines.append(f"decoded   {rep.decoded} {rep.units}")
+    if rep.rejected:
+        for reason, n in sorted(rep.rejected.items()):
+            where = rep.first_position.get(reason, "")
+            lines.append(f"rejected  {n:>10}  {reason}" + (f"  (first at {where})" if where else ""))
+    else:
+        lines.append("rejected  none")
+    if rep.gaps:
+        lines.append(f"gaps      {len(rep.gaps)}")
+        for g in rep.gaps[:20]:
+            lines.append(f"          {g.channel}: {g.n_missing} sample(s) missing from index "
+                         f"{g.start_index} (t = {g.time_s:.6f} s){' [' + g.kind + ']' if g.kind != 'gap' else ''}")
+        if len(rep.gaps) > 20:
+            lines.append(f"          ... {len(rep.gaps) - 20} more")
+    else:
+        lines.append("gaps      none")
+    for name, st in rep.timebase.items():
+        if st:
+            drift = st.get("drift_ppm")
+            lines.append(f"clock     {name}: jitter {st.get('jitter_s', 0) * 1e6:.1f} us, "
+                         f"max residual {st.get('max_abs_residual_s', 0) * 1e6:.1f} us"
+                         + (f", drift {drift:.1f} ppm" if drift is not None else ""))
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the subcommand."""
+    rec = read_from_args(args)
+    if args.json:
+        print(json.dumps(summary(rec), indent=2))
+    else:
+        print(format_info(rec))
+    warn_losses(rec)
+    return 0

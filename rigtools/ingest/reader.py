@@ -1,0 +1,137 @@
+"""``rigtools.ingest.read``: any supported recording file to a :class:`Recording`."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Any
+
+from rigtools.errors import NoDataError
+from rigtools.ingest.builder import RecordingBuilder
+from rigtools.ingest.can_assembly import assemble_can
+from rigtools.ingest.dbc import dbc_digest, load_dbc
+from rigtools.ingest.layout import ChannelMapping, can_layout, load_mapping
+from rigtools.ingest.recording import IngestReport, Provenance, Recording, RunMetadata
+from rigtools.ingest.registry import detect_format, open_source, reader_module, sha256_of
+from rigtools.schemas import schema_path
+
+__all__ = ["read", "versions"]
+
+
+def versions() -> dict[str, str]:
+    """Versions of rigtools, Python and the libraries readers use."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    out = {"python": sys.version.split()[0]}
+    for dist in ("rigtools", "numpy", "pyarrow", "mcap", "mcap-ros2-support", "python-can",
+                 "cantools", "protobuf"):
+        try:
+            out[dist] = version(dist)
+        except PackageNotFoundError:
+            out[dist] = "not installed"
+    return out
+
+
+def read(
+    path: str | Path,
+    *,
+    dbc: str | Path | None = None,
+    mapping: str | Path | ChannelMapping | None = None,
+    metadata: RunMetadata | None = None,
+    fmt: str | None = None,
+    strict_dbc: bool = True,
+) -> Recording:
+    """Read a recording file into a :class:`~rigtools.ingest.recording.Recording`.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        MCAP, BLF, ASC, TRC, candump ``.log``, python-can CSV (any of them gzipped), or a
+        normalized recording written by :func:`rigtools.ingest.write_parquet`. The reader is
+        chosen by content; the suffix is used only when the content says nothing (see
+        :func:`rigtools.ingest.registry.detect_format` for the table).
+    dbc : str or pathlib.Path, optional
+        DBC for CAN logs. Default: the reference layout ``data_schemas/rig_reference.dbc``.
+    mapping : str, pathlib.Path or ChannelMapping, optional
+        User mapping of signals or MCAP fields to channels (TOML); replaces the DBC's own
+        layout attributes, or the default MCAP decoding.
+    metadata : RunMetadata, optional
+        Run metadata; overrides what the file or the mapping carries.
+    fmt : str, optional
+        Force a format by name instead of detecting it.
+    strict_dbc : bool
+        Refuse DBCs with overlapping or oversized signals (cantools ``strict``).
+
+    Returns
+    -------
+    Recording
+        Channels, slow signals, metadata and provenance; ``recording.report`` tallies what
+        was decoded, rejected (by reason) and the gaps found.
+
+    Raises
+    ------
+    RecordingFormatError
+        The file is empty, unreadable, or damaged so that nothing intact can be returned.
+    UnsupportedFormatError
+        Neither content nor suffix names a supported format.
+    DbcError, MappingError
+        The DBC or the mapping does not load or does not match the file.
+    NoDataError
+        The file reads but holds no decodable channel or slow signal.
+    """
+    p = Path(path)
+    kind = detect_format(p, fmt)
+    module = reader_module(kind)
+    if kind == "parquet":
+        return module.read_parquet(p)
+    if isinstance(mapping, str | Path):
+        mapping = load_mapping(mapping)
+    digest, size = sha256_of(p)
+    report = IngestReport(units="messages" if kind == "mcap" else "frames")
+    builder = RecordingBuilder(str(p), report)
+    layout_desc: dict[str, Any]
+    extra: dict[str, str] = {}
+    with open_source(p) as stream:
+        if module.KIND == "can":
+            dbc_file = Path(dbc) if dbc is not None else schema_path("rig_reference.dbc")
+            db = load_dbc(dbc_file, strict=strict_dbc)
+            layout = can_layout(db, mapping, str(dbc_file))
+            layout_desc = dict(layout.description)
+            layout_desc["dbc_sha256"] = dbc_digest(dbc_file)
+            assemble_can(module.iter_batches(stream, str(p), report), layout, builder, report)
+        else:
+            extra = module.ingest(stream, str(p), builder, report, mapping)
+            layout_desc = {"source": "mapping" if mapping else "mcap-schemas"}
+            if mapping is not None:
+                layout_desc["mapping"] = mapping.to_dict()
+    meta = _merge_metadata(extra, mapping, metadata)
+    prov = Provenance(str(p), digest, size, kind, versions(), report, layout_desc)
+    rec = builder.build(meta, prov)
+    if not rec.channels and not rec.slow:
+        reasons = ", ".join(f"{k}: {v}" for k, v in sorted(report.rejected.items())) or "none"
+        raise NoDataError(
+            p, None, "at least one decodable channel or slow signal",
+            f"none ({report.decoded} {report.units} decoded; rejected {reasons})",
+        )
+    return rec
+
+
+def _merge_metadata(
+    extra: dict[str, str], mapping: ChannelMapping | None, given: RunMetadata | None
+) -> RunMetadata:
+    if given is not None:
+        return given
+    if mapping is not None and mapping.run is not None:
+        return mapping.run
+    conditions: dict[str, float] = {}
+    rest: dict[str, str] = {}
+    for k, v in extra.items():
+        if k.startswith("conditions."):
+            try:
+                conditions[k.removeprefix("conditions.")] = float(v)
+            except ValueError:
+                rest[k] = v
+        elif k not in ("run_id", "rig", "gear_set"):
+            rest[k] = v
+    return RunMetadata(extra.get("run_id"), extra.get("rig"), extra.get("gear_set"), conditions,
+                       rest)

@@ -1,0 +1,18 @@
+"""Shared fixtures: the third-party data folder, skipped cleanly when absent."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+PROJECT_ROOT = Path(__file__).resolve().parents[1]
+REALDATA = PROJECT_ROOT.parent / "shared" / "realdata"
+
+
+@pytest.fixture(scope="session")
+def realdata() -> Path:
+    """``../shared/realdata`` (third-party files, never copied into the project)."""
+    if not REALDATA.is_dir():
+        pytest.skip(f"third-party data folder {REALDATA} is absent")
+    return REALDATA
