@@ -32,17 +32,28 @@ __all__ = ["RecordingBuilder"]
 #: before the builder refuses to fill the gaps: a corrupt counter must not allocate gigabytes.
 MAX_SPAN_FACTOR = 4
 MAX_SPAN_ALLOWANCE = 10_000_000
+#: Logger stamps used for the clock check (evenly picked when there are more).
+MAX_CLOCK_POINTS = 200_000
+
+
+@dataclass
+class _Block:
+    """Rows of consecutive samples: ``raw[i, j]`` is sample ``starts[i] + j``."""
+
+    starts: np.ndarray  # int64, (m,)
+    raw: np.ndarray  # any numeric dtype, (m, k)
+    conversion: tuple[tuple[float, float], ...]
 
 
 @dataclass
 class _ChannelParts:
     unit: str
     sample_rate_Hz: float
-    index: list[np.ndarray] = field(default_factory=list)
-    values: list[np.ndarray] = field(default_factory=list)
+    blocks: list[_Block] = field(default_factory=list)
     stamp_index: list[np.ndarray] = field(default_factory=list)
     stamps: list[np.ndarray] = field(default_factory=list)
     start_time_s: float | None = None
+    n_samples: int = 0
 
 
 @dataclass
@@ -74,10 +85,11 @@ class RecordingBuilder:
         channel: str,
         unit: str,
         sample_rate_Hz: float,
-        index: np.ndarray,
+        index: np.ndarray | int,
         values: np.ndarray,
         stamp_index: np.ndarray | None = None,
         stamps_s: np.ndarray | None = None,
+        conversion: tuple[tuple[float, float], ...] = (),
     ) -> None:
         """Add a block of samples of a uniform channel.
 
@@ -87,13 +99,21 @@ class RecordingBuilder:
             Channel name and unit; a channel keeps the unit and rate of its first block.
         sample_rate_Hz : float
             Nominal rate (Hz).
-        index : numpy.ndarray
-            Absolute sample index of each value (int64).
+        index : int or numpy.ndarray
+            Where the samples go on the channel's absolute sample-index grid: an int (the
+            index of ``values[0]`` of a 1-D block of consecutive samples); an int64 array of the
+            same length as a 1-D ``values`` (one index per sample); or, for a 2-D ``values`` of
+            shape ``(m, k)`` (``m`` frames of ``k`` consecutive samples), an array of ``m`` row
+            start indices.
         values : numpy.ndarray
-            Sample values (converted to float64).
+            Sample values, or raw integers to be converted with ``conversion``. Kept in their
+            own dtype until the channel is built (int16 CAN samples cost 2 bytes each).
         stamp_index, stamps_s : numpy.ndarray, optional
             Logger timestamps (s) and the sample index each belongs to, used only to place
             index 0 on the logger clock and to check the clock.
+        conversion : tuple of (scale, offset)
+            Applied in order in float64 when the channel is built:
+            ``v = (raw * s1 + o1) * s2 + o2 ...``, exactly as a DBC and then a mapping scale it.
         """
         parts = self._channels.get(channel)
         if parts is None:
@@ -105,11 +125,30 @@ class RecordingBuilder:
                 f"from the first block ({parts.unit!r} at {parts.sample_rate_Hz} Hz); dropped"
             )
             return
-        if np.size(values) == 0:
+        vals = np.asarray(values)
+        if vals.size == 0:
             return
-        parts.index.append(np.asarray(index, np.int64))
-        parts.values.append(np.asarray(values, np.float64))
+        if vals.ndim == 2:
+            starts = np.asarray(index, np.int64).reshape(-1)
+            raw = vals
+        elif np.ndim(index) == 0:
+            starts = np.asarray([int(index)], np.int64)  # type: ignore[arg-type]
+            raw = vals.reshape(1, -1)
+        else:
+            starts = np.asarray(index, np.int64)
+            raw = vals.reshape(-1, 1)
+        if starts.shape[0] != raw.shape[0]:
+            raise ValueError(f"`index` has {starts.shape[0]} rows, `values` {raw.shape[0]}")
+        parts.blocks.append(_Block(starts, raw, tuple(conversion)))
+        parts.n_samples += raw.size
         if stamps_s is not None and stamp_index is not None and np.size(stamps_s):
+            parts.stamp_index.append(np.asarray(stamp_index, np.int64))
+            parts.stamps.append(np.asarray(stamps_s, np.float64))
+
+    def add_clock(self, channel: str, stamp_index: np.ndarray, stamps_s: np.ndarray) -> None:
+        """Add logger timestamps of a channel (and the sample index each belongs to)."""
+        parts = self._channels.get(channel)
+        if parts is not None and np.size(stamps_s):
             parts.stamp_index.append(np.asarray(stamp_index, np.int64))
             parts.stamps.append(np.asarray(stamps_s, np.float64))
 
@@ -148,56 +187,101 @@ class RecordingBuilder:
         return Recording(channels, slow, metadata, provenance)
 
     def _build_channel(self, name: str, parts: _ChannelParts) -> Channel | None:
-        if not parts.values:
+        blocks = parts.blocks
+        if not blocks:
             return None
-        idx = _join(parts.index)
-        vals = _join(parts.values)
-        if idx.size > 1 and np.any(np.diff(idx) < 0):
-            order = np.argsort(idx, kind="stable")
-            self.report.warn(f"channel {name!r}: blocks arrived out of order and were sorted")
-            idx = idx[order]
-            vals = vals[order]
-            del order
-        dup = np.zeros(idx.size, bool)
-        dup[1:] = idx[1:] == idx[:-1]
-        n_dup = int(dup.sum())
-        if n_dup:
-            self.report.reject("duplicate_sample", n_dup, f"channel {name!r}")
-            idx = idx[~dup]
-            vals = vals[~dup]
-        first = int(idx[0])
-        span = int(idx[-1]) - first + 1
-        if span > MAX_SPAN_FACTOR * idx.size + MAX_SPAN_ALLOWANCE:
+        # Row table over all blocks: start index and width of every row, in arrival order.
+        widths = np.concatenate([np.full(b.starts.shape[0], b.raw.shape[1], np.int64)
+                                 for b in blocks])
+        starts = np.concatenate([b.starts for b in blocks])
+        row0 = np.cumsum([0] + [b.starts.shape[0] for b in blocks])
+        order = None
+        if starts.size > 1 and np.any(np.diff(starts) < 0):
+            order = np.argsort(starts, kind="stable")
+            self.report.warn(f"channel {name!r}: samples arrived out of order and were sorted")
+        s_sorted = starts if order is None else starts[order]
+        w_sorted = widths if order is None else widths[order]
+        ends = s_sorted + w_sorted
+        prev_end = np.empty_like(ends)
+        prev_end[0] = s_sorted[0]
+        if ends.size > 1:
+            np.maximum.accumulate(ends[:-1], out=prev_end[1:])
+        skip_sorted = np.clip(prev_end - s_sorted, 0, w_sorted)  # samples already received
+        n_dup = int(skip_sorted.sum())
+        first = int(s_sorted[0])
+        last_end = int(ends.max())
+        span = last_end - first
+        n_kept = int(widths.sum()) - n_dup
+        if span > MAX_SPAN_FACTOR * n_kept + MAX_SPAN_ALLOWANCE:
             raise RecordingFormatError(
                 self.path,
                 f"channel {name!r}",
-                f"sample indices spanning about the {idx.size} samples received",
-                f"indices from {first} to {int(idx[-1])} (span {span})",
+                f"sample indices spanning about the {n_kept} samples received",
+                f"indices from {first} to {last_end - 1} (span {span})",
                 "the sample counter is corrupt or restarted beyond repair",
             )
-        pos = idx - first
-        if span == idx.size:
-            values = vals
-            valid = np.ones(span, bool)
+        if n_dup:
+            self.report.reject("duplicate_sample", n_dup, f"channel {name!r}")
+        skip = np.empty_like(skip_sorted)
+        if order is None:
+            skip = skip_sorted
         else:
-            values = np.full(span, np.nan)
-            values[pos] = vals
-            valid = np.zeros(span, bool)
-            valid[pos] = True
-        del vals
+            skip[order] = skip_sorted
+        del s_sorted, w_sorted, prev_end, skip_sorted, order
+        # Gaps: holes between the running end of the rows and the next row's start.
+        s_sorted = np.sort(starts)
+        e_sorted = np.maximum.accumulate((starts + widths)[np.argsort(starts, kind="stable")])
+        hole = s_sorted[1:] - e_sorted[:-1]
+        gap_at = np.flatnonzero(hole > 0)
+        complete = gap_at.size == 0
+        values = np.empty(span) if complete else np.full(span, np.nan)
+        valid = np.ones(span, bool) if complete else np.zeros(span, bool)
+        for bi, b in enumerate(blocks):
+            bs = b.starts - first
+            bskip = skip[row0[bi] : row0[bi + 1]]
+            k = b.raw.shape[1]
+            conv = b.conversion
+            clean = not bskip.any()
+            if clean and (bs.shape[0] == 1 or np.all(np.diff(bs) == k)):
+                lo = int(bs[0])
+                dst = values[lo : lo + b.raw.size]
+                _convert_into(b.raw.reshape(-1), conv, dst)
+                if not complete:
+                    valid[lo : lo + b.raw.size] = True
+                continue
+            conv_rows = np.empty(b.raw.shape, np.float64)
+            _convert_into(b.raw, conv, conv_rows)
+            full = bskip == 0
+            if full.any():
+                pos = bs[full][:, None] + np.arange(k)
+                values[pos] = conv_rows[full]
+                if not complete:
+                    valid[pos] = True
+            for r in np.flatnonzero(~full):
+                sk = int(bskip[r])
+                if sk >= k:
+                    continue
+                lo = int(bs[r]) + sk
+                values[lo : int(bs[r]) + k] = conv_rows[r, sk:]
+                if not complete:
+                    valid[lo : int(bs[r]) + k] = True
+        parts.blocks = []
         nonfinite = valid & ~np.isfinite(values)
         n_nonfinite = int(nonfinite.sum())
         if n_nonfinite:
             valid &= ~nonfinite
             at = int(np.flatnonzero(nonfinite)[0]) + first
             self.report.reject("non_finite_sample", n_nonfinite, f"channel {name!r} index {at}")
+        del nonfinite
         # Start time: exact when the source states it, else from the logger stamps.
         if parts.start_time_s is not None:
             t0 = parts.start_time_s
         elif parts.stamps:
-            t0, stats = timebase_check(
-                np.concatenate(parts.stamp_index), np.concatenate(parts.stamps), parts.sample_rate_Hz
-            )
+            si, st = _join(parts.stamp_index), _join(parts.stamps)
+            if si.size > MAX_CLOCK_POINTS:  # the clock check needs no more than this
+                pick = np.linspace(0, si.size - 1, MAX_CLOCK_POINTS).astype(np.int64)
+                si, st = si[pick], st[pick]
+            t0, stats = timebase_check(si, st, parts.sample_rate_Hz)
             self.report.timebase[name] = stats
             if stats.get("n_stamps_backwards", 0):
                 self.report.warn(
@@ -206,11 +290,10 @@ class RecordingBuilder:
                 )
         else:
             t0 = 0.0
-        steps = np.diff(idx)
-        for p in np.flatnonzero(steps > 1):
-            start = int(idx[p]) + 1
+        for p in gap_at:
+            start = int(e_sorted[p])
             self.report.gaps.append(
-                Gap(name, start, int(steps[p]) - 1, t0 + start / parts.sample_rate_Hz)
+                Gap(name, start, int(hole[p]), t0 + start / parts.sample_rate_Hz)
             )
         return Channel(name, parts.unit, parts.sample_rate_Hz, float(t0), first, values, valid)
 
@@ -235,3 +318,15 @@ def _join(blocks: list[np.ndarray]) -> np.ndarray:
     out = blocks[0] if len(blocks) == 1 else np.concatenate(blocks)
     blocks.clear()
     return out
+
+
+def _convert_into(raw: np.ndarray, conversion: tuple[tuple[float, float], ...],
+                  out: np.ndarray) -> None:
+    """``out[...] = raw`` as float64, then each ``(scale, offset)`` stage applied in place."""
+    np.copyto(out, raw, casting="unsafe")
+    for scale, offset in conversion:
+        if scale == 1.0 and offset == 0.0:
+            continue
+        # Same operations as rigtools.ingest.dbc.decode_signal, so results match bit for bit.
+        np.multiply(out, scale, out=out)
+        np.add(out, offset, out=out)

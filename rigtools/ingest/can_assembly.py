@@ -22,7 +22,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rigtools.ingest.builder import RecordingBuilder
-from rigtools.ingest.dbc import decode_signal, multiplex_mask
+from rigtools.ingest.builder import MAX_CLOCK_POINTS
+from rigtools.ingest.dbc import decode_signal, multiplex_mask, signal_raw
 from rigtools.ingest.frames import CanFrameBatch
 from rigtools.ingest.layout import CanLayout, CanUniform
 from rigtools.ingest.recording import IngestReport
@@ -36,9 +37,9 @@ class _UniformAcc:
     spec: CanUniform
     counters: list[np.ndarray] = field(default_factory=list)
     stamps: list[np.ndarray] = field(default_factory=list)
-    values: list[np.ndarray] = field(default_factory=list)
-    positions: list[np.ndarray] = field(default_factory=list)
-    position_unit: str = "byte"
+    raws: list[np.ndarray] = field(default_factory=list)
+    conversion: tuple[tuple[float, float], ...] = ()
+    first_position: str = ""
 
 
 def assemble_can(
@@ -93,7 +94,7 @@ def assemble_can(
             stamps = batch.timestamp_s[rows]
             report.decoded += int(rows.size)
             for acc in uniform_by_key.get(key, ()):
-                _decode_uniform(acc, data, stamps, batch.position[rows], batch.position_unit)
+                _decode_uniform(acc, data, stamps, batch.where(int(rows[0])))
             for s in slow_by_key.get(key, ()):
                 vals = decode_signal(data, s.signal)
                 t = stamps
@@ -109,67 +110,76 @@ def assemble_can(
 
 
 def _decode_uniform(
-    acc: _UniformAcc, data: np.ndarray, stamps: np.ndarray, positions: np.ndarray, unit: str
+    acc: _UniformAcc, data: np.ndarray, stamps: np.ndarray, where: str
 ) -> None:
     u = acc.spec
-    cols = [decode_signal(data, s) for s in u.samples]
-    vals = np.stack(cols, axis=1) if len(cols) > 1 else cols[0][:, None]
+    raws, convs = zip(*(signal_raw(data, s) for s in u.samples), strict=True)
+    if len(set(convs)) == 1 and len({r.dtype for r in raws}) == 1:
+        raw = np.stack(raws, axis=1)  # int16 samples stay int16 until the channel is built
+        conv: tuple[tuple[float, float], ...] = (convs[0],)
+    else:  # samples with different scalings: convert now
+        raw = np.stack([r.astype(np.float64) * c[0] + c[1] for r, c in zip(raws, convs,
+                                                                           strict=True)], axis=1)
+        conv = ()
     if u.spec.scale != 1.0 or u.spec.offset != 0.0:
-        vals = vals * u.spec.scale + u.spec.offset
-    acc.values.append(vals)
+        conv = (*conv, (u.spec.scale, u.spec.offset))
+    if not acc.raws:
+        acc.conversion = conv
+        acc.first_position = where
+    acc.raws.append(raw)
     acc.stamps.append(stamps)
-    acc.positions.append(positions)
-    acc.position_unit = unit
     if u.counter is not None:
-        acc.counters.append(decode_signal(data, u.counter).astype(np.int64))
+        acc.counters.append(signal_raw(data, u.counter)[0])
 
 
 def _finish_uniform(acc: _UniformAcc, builder: RecordingBuilder, report: IngestReport) -> None:
     u = acc.spec
-    if not acc.values:
+    if not acc.raws:
         return
     k = len(u.samples)
     fs = u.spec.sample_rate_Hz
     frame_rate = fs / k
     stamps = np.concatenate(acc.stamps)
-    positions = np.concatenate(acc.positions)
+    acc.stamps.clear()
+    name = u.spec.channel
     if u.counter is not None:
-        counters = np.concatenate(acc.counters)
-        raw_max = (1 << int(u.counter.length))
-        scale = float(u.counter.scale)
-        if scale != 1.0 or u.counter.offset != 0:
-            counters = np.round((counters - float(u.counter.offset)) / scale).astype(np.int64)
-        un = unwrap_counter(counters, raw_max, stamps, frame_rate)
+        # Raw counter bits (a DBC scale on a counter is ignored: it counts frames).
+        counters = np.concatenate(acc.counters).astype(np.int64)
+        acc.counters.clear()
+        un = unwrap_counter(counters, 1 << int(u.counter.length), stamps, frame_rate)
+        del counters
         if un.n_duplicate:
-            first = positions[np.flatnonzero(~un.keep)[0]]
-            report.reject("duplicate_frame", un.n_duplicate,
-                          f"{acc.position_unit} {int(first)} (channel {u.spec.channel!r})")
+            report.reject("duplicate_frame", un.n_duplicate, f"channel {name!r}")
         if un.n_backwards:
-            report.reject("counter_backwards", un.n_backwards, f"channel {u.spec.channel!r}")
+            report.reject("counter_backwards", un.n_backwards, f"channel {name!r}")
         if un.restarts.size:
             report.warn(
-                f"channel {u.spec.channel!r}: sample counter restarted {un.restarts.size} time(s) "
-                f"(first at {acc.position_unit} {int(positions[un.restarts[0]])}); "
+                f"channel {name!r}: sample counter restarted {un.restarts.size} time(s) "
+                f"(first at frame {int(un.restarts[0])} of the channel); "
                 "resynchronised from the logger clock"
             )
-        ticks = un.ticks
-        keep = un.keep
+        ticks, keep = un.ticks, un.keep
     else:
-        t0 = stamps.min()
-        ticks = np.round((stamps - t0) * frame_rate).astype(np.int64)
+        ticks = np.round((stamps - stamps.min()) * frame_rate).astype(np.int64)
         keep = np.ones(ticks.size, bool)
-        report.warn(f"channel {u.spec.channel!r}: no sample counter; time base from logger stamps")
-    values = np.concatenate(acc.values)
-    acc.values.clear()
-    if not keep.all():
-        ticks, values, stamps = ticks[keep], values[keep], stamps[keep]
-    index = (ticks[:, None] * k + np.arange(k, dtype=np.int64)).ravel()
-    builder.add_samples(
-        u.spec.channel,
-        u.unit,
-        fs,
-        index,
-        values.ravel(),
-        stamp_index=ticks * k + (k - 1),
-        stamps_s=stamps,
-    )
+        report.warn(f"channel {name!r}: no sample counter; time base from logger stamps")
+    # The clock check needs only a sample of the stamps.
+    pick = np.flatnonzero(keep)
+    if pick.size > MAX_CLOCK_POINTS:
+        pick = pick[np.linspace(0, pick.size - 1, MAX_CLOCK_POINTS).astype(np.int64)]
+    clock_index, clock_stamps = ticks[pick] * k + (k - 1), stamps[pick]
+    del stamps, pick
+    row = 0
+    raws = acc.raws
+    for i in range(len(raws)):
+        raw = raws[i]
+        raws[i] = None  # type: ignore[call-overload]  # release as we go
+        m = raw.shape[0]
+        sel = keep[row : row + m]
+        t = ticks[row : row + m]
+        row += m
+        if not sel.all():
+            raw, t = raw[sel], t[sel]
+        builder.add_samples(name, u.unit, fs, t * k, raw, conversion=acc.conversion)
+    raws.clear()
+    builder.add_clock(name, clock_index, clock_stamps)

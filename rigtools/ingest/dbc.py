@@ -18,7 +18,7 @@ import numpy as np
 
 from rigtools.errors import DbcError
 
-__all__ = ["dbc_digest", "decode_signal", "load_dbc", "multiplex_mask", "raw_signal", "signal_bytes"]
+__all__ = ["dbc_digest", "decode_signal", "signal_raw", "load_dbc", "multiplex_mask", "raw_signal", "signal_bytes"]
 
 
 def load_dbc(path: str | Path, *, strict: bool = True) -> Any:
@@ -113,36 +113,48 @@ def raw_signal(data: np.ndarray, start: int, length: int, byte_order: str) -> np
     return (acc >> np.uint64(shift)) & mask
 
 
+def signal_raw(data: np.ndarray, signal: Any) -> tuple[np.ndarray, tuple[float, float]]:
+    """Raw values of a signal in the smallest exact dtype, and its ``(scale, offset)``.
+
+    Integer signals come back as the smallest signed or unsigned NumPy integer type that holds
+    ``length`` bits (an int16 accelerometer sample costs 2 bytes); float signals as float32 or
+    float64. ``decode_signal`` is ``raw.astype(float64) * scale + offset``.
+    """
+    length = int(signal.length)
+    raw = raw_signal(data, int(signal.start), length, signal.byte_order)
+    conv = (float(signal.scale), float(signal.offset))
+    if signal.is_float:
+        if length == 32:
+            return raw.astype(np.uint32).view(np.float32), conv
+        if length == 64:
+            return raw.view(np.float64), conv
+        raise DbcError(None, f"signal {signal.name!r}", "a 32- or 64-bit float signal",
+                       f"{length} bits")
+    if signal.is_signed:
+        if length == 64:
+            return raw.view(np.int64), conv
+        sraw = raw.astype(np.int64)
+        neg = (raw >> np.uint64(length - 1)) & np.uint64(1)
+        sraw -= neg.astype(np.int64) << np.int64(length)
+        dtype = next(t for t in (np.int8, np.int16, np.int32, np.int64)
+                     if np.iinfo(t).bits >= length)
+        return sraw.astype(dtype), conv
+    dtype = next(t for t in (np.uint8, np.uint16, np.uint32, np.uint64)
+                 if np.iinfo(t).bits >= length)
+    return raw.astype(dtype), conv
+
+
 def decode_signal(data: np.ndarray, signal: Any) -> np.ndarray:
     """Physical values (float64) of a cantools signal for every row of ``data``.
 
     ``raw * scale + offset``, with two's complement for signed signals and IEEE 754 for float
     signals, as cantools' ``decode_message(..., decode_choices=False)`` computes them.
     """
-    length = int(signal.length)
-    raw = raw_signal(data, int(signal.start), length, signal.byte_order)
-    if signal.is_float:
-        if length == 32:
-            val = raw.astype(np.uint32).view(np.float32).astype(np.float64)
-        elif length == 64:
-            val = raw.view(np.float64).copy()
-        else:
-            raise DbcError(None, f"signal {signal.name!r}", "a 32- or 64-bit float signal",
-                           f"{length} bits")
-    elif signal.is_signed:
-        if length == 64:
-            val = raw.view(np.int64).astype(np.float64)
-        else:
-            sraw = raw.astype(np.int64)
-            neg = (raw >> np.uint64(length - 1)) & np.uint64(1)
-            sraw -= neg.astype(np.int64) << np.int64(length)
-            val = sraw.astype(np.float64)
-    else:
-        val = raw.astype(np.float64)
-    scale, offset = signal.scale, signal.offset
+    raw, (scale, offset) = signal_raw(data, signal)
+    val = raw.astype(np.float64)
     if scale == 1 and offset == 0:
         return val
-    return val * float(scale) + float(offset)
+    return val * scale + offset
 
 
 def multiplex_mask(data: np.ndarray, message: Any, signal: Any) -> np.ndarray | None:

@@ -95,3 +95,21 @@ def test_parquet_with_metadata_claiming_more_samples_than_stored_is_refused(tmp_
     pq.write_table(bad, tmp_path / "bad.parquet")
     with pytest.raises(RecordingFormatError, match="at least 10 rows"):
         read_parquet(tmp_path / "bad.parquet")
+
+
+def test_rows_of_raw_ints_with_partial_overlap_and_conversion_stages():
+    rep = IngestReport()
+    b = RecordingBuilder("mem", rep)
+    raw = np.array([[1, 2, 3], [4, 5, 6]], np.int16)
+    b.add_samples("acc", "m/s^2", 300.0, np.array([0, 3]), raw, conversion=((0.5, 0.0),))
+    # A late block overlapping the last two samples already received, then running on.
+    b.add_samples("acc", "m/s^2", 300.0, np.array([4]), np.array([[50, 60, 7]], np.int16),
+                  conversion=((0.5, 0.0),))
+    b.add_samples("acc", "m/s^2", 300.0, 10, np.array([8.0, 9.0]))
+    rec = b.build(RunMetadata(), Provenance("mem", "0" * 64, 0, "t", {}, rep))
+    ch = rec.channels["acc"]
+    # First received wins; only the new sample of the late block is used.
+    assert ch.values[:7].tolist() == [0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5]
+    assert ch.valid.tolist() == [True] * 7 + [False] * 3 + [True] * 2
+    assert rep.rejected["duplicate_sample"] == 2
+    assert [(g.start_index, g.n_missing) for g in rep.gaps] == [(7, 3)]
