@@ -53,12 +53,14 @@ def synthetic_run(
     n_channels: int = 4,
     speed_rpm: float = 1500.0,
     z1: int = 16,
+    z2: int = 24,
     torque_Nm: float = 302.0,
     bulk_temperature_C: float = 90.0,
     f_n_Hz: float = 3200.0,
     zeta: float = 0.02,
     rng: np.random.Generator | int | None = 0,
     start_time_s: float = 1_763_800_000.0,
+    multiple_of: int = 3,
 ) -> SyntheticRun:
     """Make a synthetic run (see the module docstring for what it contains).
 
@@ -72,8 +74,8 @@ def synthetic_run(
         Number of accelerometers, named ``accel_1`` ... .
     speed_rpm : float
         Pinion speed (rpm); mesh frequency ``z1 * speed_rpm / 60``.
-    z1 : int
-        Pinion teeth.
+    z1, z2 : int
+        Pinion and wheel teeth (FZG type C: 16 and 24).
     torque_Nm, bulk_temperature_C : float
         Logged conditions (slow signals and metadata).
     f_n_Hz, zeta : float
@@ -82,10 +84,12 @@ def synthetic_run(
         Randomness (SPEC 7).
     start_time_s : float
         Logger time of sample 0.
+    multiple_of : int
+        The sample count is rounded down to a multiple of this (3: whole reference CAN frames).
     """
     gen = np.random.default_rng(rng)
     fs = float(sample_rate_Hz)
-    n = int(round(duration_s * fs))
+    n = int(round(duration_s * fs)) // multiple_of * multiple_of
     t = np.arange(n) / fs
     f_mesh = z1 * speed_rpm / 60.0
     amps = (4.0, 1.5, 0.8)
@@ -104,9 +108,12 @@ def synthetic_run(
     ts = np.arange(0.0, duration_s, 0.1)
     slow = {
         "PinionSpeed_rpm": (start_time_s + ts, np.round((speed_rpm + gen.normal(0, 0.5, ts.size)) * 4) / 4, "rpm"),
+        "WheelSpeed_rpm": (start_time_s + ts, np.round(speed_rpm * z1 / z2 * 4) / 4 + 0 * ts, "rpm"),
         "Torque_Nm": (start_time_s + ts, np.round((torque_Nm + gen.normal(0, 0.5, ts.size)) * 20) / 20, "N.m"),
         "BulkTemp_C": (start_time_s + ts, np.round((bulk_temperature_C + 0.01 * ts) * 100) / 100, "degC"),
         "OilTemp_C": (start_time_s + ts, np.round((bulk_temperature_C - 2 + 0.01 * ts) * 100) / 100, "degC"),
+        "PinionTemp_C": (start_time_s + ts, np.round((bulk_temperature_C + 1.5 + 0.01 * ts) * 100) / 100, "degC"),
+        "WheelTemp_C": (start_time_s + ts, np.round((bulk_temperature_C + 0.8 + 0.01 * ts) * 100) / 100, "degC"),
     }
     truth = {"mesh_frequency_Hz": f_mesh, "A1": amps[0], "A2": amps[1], "A3": amps[2],
              "f_n_Hz": f_n_Hz, "zeta": zeta}
