@@ -7,7 +7,7 @@ the CLI) can tell "rigtools refused this input, here is why" from a bug::
     ├── RecordingFormatError (ValueError)   a file is not what it claims, or is damaged beyond use
     │   └── UnsupportedFormatError          no reader knows this suffix or content
     ├── DbcError (ValueError)               a DBC file does not load, or lacks what a layout needs
-    ├── MappingError (ValueError)           a user channel mapping is malformed or names unknown things
+    ├── MappingError (ValueError)           a user mapping is malformed or names unknown things
     └── NoDataError                         a file is readable but holds nothing that decodes
 
 Structured fields (``path``, ``position``, ``expected``, ``found``) ride on the exception and the

@@ -96,14 +96,16 @@ def format_info(rec: Recording) -> str:
     if rep.rejected:
         for reason, n in sorted(rep.rejected.items()):
             where = rep.first_position.get(reason, "")
-            lines.append(f"rejected  {n:>10}  {reason}" + (f"  (first at {where})" if where else ""))
+            at = f"  (first at {where})" if where else ""
+            lines.append(f"rejected  {n:>10}  {reason}{at}")
     else:
         lines.append("rejected  none")
     if rep.gaps:
         lines.append(f"gaps      {len(rep.gaps)}")
         for g in rep.gaps[:20]:
+            kind = f" [{g.kind}]" if g.kind != "gap" else ""
             lines.append(f"          {g.channel}: {g.n_missing} sample(s) missing from index "
-                         f"{g.start_index} (t = {g.time_s:.6f} s){' [' + g.kind + ']' if g.kind != 'gap' else ''}")
+                         f"{g.start_index} (t = {g.time_s:.6f} s){kind}")
         if len(rep.gaps) > 20:
             lines.append(f"          ... {len(rep.gaps) - 20} more")
     else:

@@ -55,10 +55,9 @@ def analyse_channel(x: np.ndarray, fs: float, f_mesh: float) -> dict[str, float]
     n = x.size
     w = np.hanning(n)
     spec = np.abs(np.fft.rfft(x * w)) * 2 / w.sum()
-    freqs = np.fft.rfftfreq(n, 1 / fs)
     out: dict[str, float] = {"rms": float(np.sqrt(np.mean(x**2)))}
     for h in (1, 2, 3):
-        i = int(round(h * f_mesh * n / fs))
+        i = round(h * f_mesh * n / fs)
         # Energy sum over the Hann main lobe recovers the amplitude off-bin.
         lobe = spec[i - 2 : i + 3]
         out[f"A{h}"] = float(np.sqrt(np.sum(lobe**2) / 1.5))

@@ -89,7 +89,7 @@ def synthetic_run(
     """
     gen = np.random.default_rng(rng)
     fs = float(sample_rate_Hz)
-    n = int(round(duration_s * fs)) // multiple_of * multiple_of
+    n = round(duration_s * fs) // multiple_of * multiple_of
     t = np.arange(n) / fs
     f_mesh = z1 * speed_rpm / 60.0
     amps = (4.0, 1.5, 0.8)
@@ -106,14 +106,21 @@ def synthetic_run(
         x = gain * (mesh + reson) + gen.normal(0.0, 0.2, n)
         channels[f"accel_{k + 1}"] = np.round(x / ACCEL_LSB_M_S2) * ACCEL_LSB_M_S2
     ts = np.arange(0.0, duration_s, 0.1)
+    t_slow = start_time_s + ts
+
+    def quantised(x: np.ndarray, step: float) -> np.ndarray:  # to the DBC resolution
+        return np.round(np.asarray(x, float) / step) * step
+
+    drift = 0.01 * ts  # gear bodies warming slowly (K)
     slow = {
-        "PinionSpeed_rpm": (start_time_s + ts, np.round((speed_rpm + gen.normal(0, 0.5, ts.size)) * 4) / 4, "rpm"),
-        "WheelSpeed_rpm": (start_time_s + ts, np.round(speed_rpm * z1 / z2 * 4) / 4 + 0 * ts, "rpm"),
-        "Torque_Nm": (start_time_s + ts, np.round((torque_Nm + gen.normal(0, 0.5, ts.size)) * 20) / 20, "N.m"),
-        "BulkTemp_C": (start_time_s + ts, np.round((bulk_temperature_C + 0.01 * ts) * 100) / 100, "degC"),
-        "OilTemp_C": (start_time_s + ts, np.round((bulk_temperature_C - 2 + 0.01 * ts) * 100) / 100, "degC"),
-        "PinionTemp_C": (start_time_s + ts, np.round((bulk_temperature_C + 1.5 + 0.01 * ts) * 100) / 100, "degC"),
-        "WheelTemp_C": (start_time_s + ts, np.round((bulk_temperature_C + 0.8 + 0.01 * ts) * 100) / 100, "degC"),
+        "PinionSpeed_rpm": (t_slow, quantised(speed_rpm + gen.normal(0, 0.5, ts.size), 0.25),
+                            "rpm"),
+        "WheelSpeed_rpm": (t_slow, quantised(np.full(ts.size, speed_rpm * z1 / z2), 0.25), "rpm"),
+        "Torque_Nm": (t_slow, quantised(torque_Nm + gen.normal(0, 0.5, ts.size), 0.05), "N.m"),
+        "BulkTemp_C": (t_slow, quantised(bulk_temperature_C + drift, 0.01), "degC"),
+        "OilTemp_C": (t_slow, quantised(bulk_temperature_C - 2 + drift, 0.01), "degC"),
+        "PinionTemp_C": (t_slow, quantised(bulk_temperature_C + 1.5 + drift, 0.01), "degC"),
+        "WheelTemp_C": (t_slow, quantised(bulk_temperature_C + 0.8 + drift, 0.01), "degC"),
     }
     truth = {"mesh_frequency_Hz": f_mesh, "A1": amps[0], "A2": amps[1], "A3": amps[2],
              "f_n_Hz": f_n_Hz, "zeta": zeta}

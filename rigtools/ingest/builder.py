@@ -323,7 +323,8 @@ def _join(blocks: list[np.ndarray]) -> np.ndarray:
 def _convert_into(raw: np.ndarray, conversion: tuple[tuple[float, float], ...],
                   out: np.ndarray) -> None:
     """``out[...] = raw`` as float64, then each ``(scale, offset)`` stage applied in place."""
-    np.copyto(out, raw, casting="unsafe")
+    with np.errstate(invalid="ignore"):  # signalling NaNs in float32 payloads stay NaN
+        np.copyto(out, raw, casting="unsafe")
     for scale, offset in conversion:
         if scale == 1.0 and offset == 0.0:
             continue

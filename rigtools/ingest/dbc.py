@@ -18,7 +18,15 @@ import numpy as np
 
 from rigtools.errors import DbcError
 
-__all__ = ["dbc_digest", "decode_signal", "signal_raw", "load_dbc", "multiplex_mask", "raw_signal", "signal_bytes"]
+__all__ = [
+    "dbc_digest",
+    "decode_signal",
+    "load_dbc",
+    "multiplex_mask",
+    "raw_signal",
+    "signal_bytes",
+    "signal_raw",
+]
 
 
 def load_dbc(path: str | Path, *, strict: bool = True) -> Any:
@@ -136,12 +144,12 @@ def signal_raw(data: np.ndarray, signal: Any) -> tuple[np.ndarray, tuple[float, 
         sraw = raw.astype(np.int64)
         neg = (raw >> np.uint64(length - 1)) & np.uint64(1)
         sraw -= neg.astype(np.int64) << np.int64(length)
-        dtype = next(t for t in (np.int8, np.int16, np.int32, np.int64)
-                     if np.iinfo(t).bits >= length)
-        return sraw.astype(dtype), conv
-    dtype = next(t for t in (np.uint8, np.uint16, np.uint32, np.uint64)
-                 if np.iinfo(t).bits >= length)
-    return raw.astype(dtype), conv
+        sdtype = next(t for t in (np.int8, np.int16, np.int32, np.int64)
+                      if np.iinfo(t).bits >= length)
+        return sraw.astype(sdtype), conv
+    udtype = next(t for t in (np.uint8, np.uint16, np.uint32, np.uint64)
+                  if np.iinfo(t).bits >= length)
+    return raw.astype(udtype), conv
 
 
 def decode_signal(data: np.ndarray, signal: Any) -> np.ndarray:
@@ -151,7 +159,8 @@ def decode_signal(data: np.ndarray, signal: Any) -> np.ndarray:
     signals, as cantools' ``decode_message(..., decode_choices=False)`` computes them.
     """
     raw, (scale, offset) = signal_raw(data, signal)
-    val = raw.astype(np.float64)
+    with np.errstate(invalid="ignore"):  # a signalling NaN in a float32 signal stays NaN
+        val = raw.astype(np.float64)
     if scale == 1 and offset == 0:
         return val
     return val * scale + offset

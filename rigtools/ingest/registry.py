@@ -77,12 +77,12 @@ def open_source(path: Path) -> BinaryIO:
 
 
 def detect_format(path: str | Path, fmt: str | None = None) -> str:
-    """Name the format of a file.
+    r"""Name the format of a file.
 
     ===============  ==========================================  =============
     format           content signature                            suffix
     ===============  ==========================================  =============
-    ``mcap``         magic ``\\x89MCAP0\\r\\n``                   ``.mcap``
+    ``mcap``         magic ``\x89MCAP0\r\n``                   ``.mcap``
     ``parquet``      magic ``PAR1`` (a normalized recording)      ``.parquet``
     ``blf``          magic ``LOGG``                               ``.blf``
     ``trc``          ``;$FILEVERSION`` or a PEAK header comment   ``.trc``
