@@ -222,17 +222,16 @@ class RecordingBuilder:
             )
         if n_dup:
             self.report.reject("duplicate_sample", n_dup, f"channel {name!r}")
-        skip = np.empty_like(skip_sorted)
         if order is None:
             skip = skip_sorted
         else:
+            skip = np.empty_like(skip_sorted)
             skip[order] = skip_sorted
-        del s_sorted, w_sorted, prev_end, skip_sorted, order
         # Gaps: holes between the running end of the rows and the next row's start.
-        s_sorted = np.sort(starts)
-        e_sorted = np.maximum.accumulate((starts + widths)[np.argsort(starts, kind="stable")])
+        e_sorted = np.maximum.accumulate(ends)
         hole = s_sorted[1:] - e_sorted[:-1]
         gap_at = np.flatnonzero(hole > 0)
+        del w_sorted, prev_end, skip_sorted, order, ends, s_sorted
         complete = gap_at.size == 0
         values = np.empty(span) if complete else np.full(span, np.nan)
         valid = np.ones(span, bool) if complete else np.zeros(span, bool)

@@ -21,8 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rigtools.ingest.builder import RecordingBuilder
-from rigtools.ingest.builder import MAX_CLOCK_POINTS
+from rigtools.ingest.builder import MAX_CLOCK_POINTS, RecordingBuilder
 from rigtools.ingest.dbc import decode_signal, multiplex_mask, signal_raw
 from rigtools.ingest.frames import CanFrameBatch
 from rigtools.ingest.layout import CanLayout, CanUniform

@@ -1,0 +1,995 @@
+"""Payload decoders for MCAP messages, chosen by a factory from the message encoding and schema.
+
+:func:`decoder_for` answers, for one channel's ``(message_encoding, schema)``, a
+:class:`Decoder` (a callable on the message bytes, tagged with what it yields) or ``None``;
+the MCAP reader caches the answer per channel and counts every message of a channel with
+no decoder as ``no_decoder``, naming topic, encoding and schema in a warning.
+
+====================  ==================  =========================  =====================
+kind                  message encoding    schema (encoding, name)    yields
+====================  ==================  =========================  =====================
+``"batch"``           ``protobuf``        ``protobuf``,              :class:`AccelBatch`
+                                          ``rigtools.AccelBatch``
+``"batch"``           ``json``            ``jsonschema``,            :class:`AccelBatch`
+                                          ``rigtools.AccelBatch``
+``"slow"``            ``json``            ``jsonschema``,            :class:`SlowValue`
+                                          ``rigtools.SlowValue``
+``"imu"``             ``cdr``             ``ros2msg``,               :class:`ImuSample`
+                                          ``sensor_msgs/msg/Imu``
+``"scalar"``          ``cdr``             ``ros2msg``, one numeric   float
+                                          field (``std_msgs/msg/
+                                          Float64``, ...)
+``"generic"``         ``cdr`` / ``json``  ``ros2msg`` / any          decoded object for a
+                                                                     mapping's dotted path
+====================  ==================  =========================  =====================
+
+The rigtools accelerometer batch (``data_schemas/accel_batch.proto`` and
+``accel_batch.schema.json``) is decoded by a small hand-written protobuf wire-format walker
+that views the packed ``values`` as ``float32`` in place (``np.frombuffer``), so the cost per
+message does not grow with the number of samples in Python. ROS 2 ``Imu`` is read straight
+from its CDR layout; every other ROS 2 message goes through ``mcap-ros2-support``'s generic
+CDR decoder.
+
+``rigtools.SlowValue`` is the small JSON message rigtools writes for slow signals (one point
+per message; schema :data:`SLOW_VALUE_SCHEMA`)::
+
+    {"name": "PinionSpeed_rpm", "unit": "rpm", "stamp_ns": 1700000000000000000, "value": 1500.0}
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import math
+import re
+import struct
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Final, Literal, NamedTuple
+
+import numpy as np
+
+from rigtools.errors import RecordingFormatError
+
+__all__ = [
+    "ACCEL_BATCH_FIELDS",
+    "ACCEL_BATCH_SCHEMA_NAME",
+    "IMU_SCHEMA_NAME",
+    "IMU_SCHEMA_TEXT",
+    "SLOW_VALUE_SCHEMA",
+    "SLOW_VALUE_SCHEMA_NAME",
+    "AccelBatch",
+    "AccelBatchColumns",
+    "Decoder",
+    "ImuSample",
+    "PayloadDecodeError",
+    "SchemaRecord",
+    "SchemaUnusableError",
+    "SlowValue",
+    "accel_batch_file_descriptor_set",
+    "decode_accel_batch_json",
+    "decode_accel_batch_protobuf",
+    "decode_accel_batches_protobuf",
+    "decode_imu_cdr",
+    "decode_slow_value_json",
+    "decoder_for",
+    "encode_accel_batch_protobuf",
+    "get_field",
+    "message_stamp_ns",
+    "ros2_scalar_field",
+]
+
+ACCEL_BATCH_SCHEMA_NAME: Final = "rigtools.AccelBatch"
+SLOW_VALUE_SCHEMA_NAME: Final = "rigtools.SlowValue"
+IMU_SCHEMA_NAME: Final = "sensor_msgs/msg/Imu"
+
+#: The fields of ``rigtools.AccelBatch``: (name, number, protobuf type, label), in the order
+#: of ``data_schemas/accel_batch.proto``. Types and labels are ``FieldDescriptorProto`` names.
+ACCEL_BATCH_FIELDS: Final[tuple[tuple[str, int, str, str], ...]] = (
+    ("channel", 1, "TYPE_STRING", "LABEL_OPTIONAL"),
+    ("unit", 2, "TYPE_STRING", "LABEL_OPTIONAL"),
+    ("sample_rate_Hz", 3, "TYPE_DOUBLE", "LABEL_OPTIONAL"),
+    ("first_sample_index", 4, "TYPE_UINT64", "LABEL_OPTIONAL"),
+    ("stamp_ns", 5, "TYPE_UINT64", "LABEL_OPTIONAL"),
+    ("values", 6, "TYPE_FLOAT", "LABEL_REPEATED"),
+)
+
+#: JSON Schema of ``rigtools.SlowValue`` (message encoding ``json``): one point of a slow
+#: signal. ``stamp_ns`` is the logger time (ns since the UNIX epoch); ``value`` is in ``unit``.
+SLOW_VALUE_SCHEMA: Final[dict[str, Any]] = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "title": SLOW_VALUE_SCHEMA_NAME,
+    "description": "One point of a rigtools slow signal (speed, torque, temperature).",
+    "type": "object",
+    "required": ["name", "unit", "stamp_ns", "value"],
+    "additionalProperties": False,
+    "properties": {
+        "name": {"type": "string", "minLength": 1, "description": "Signal name."},
+        "unit": {"type": "string", "description": "Unit of value, e.g. 'rpm'."},
+        "stamp_ns": {"type": "integer", "minimum": 0,
+                     "description": "Logger time (ns since the UNIX epoch)."},
+        "value": {"type": "number", "description": "Value in unit."},
+    },
+}
+
+#: ROS 2 message definition of ``sensor_msgs/msg/Imu`` with its dependencies, as rosbag2 and
+#: ``mcap-ros2-support`` write it into ``ros2msg`` schemas.
+IMU_SCHEMA_TEXT: Final = """\
+std_msgs/Header header
+geometry_msgs/Quaternion orientation
+float64[9] orientation_covariance
+geometry_msgs/Vector3 angular_velocity
+float64[9] angular_velocity_covariance
+geometry_msgs/Vector3 linear_acceleration
+float64[9] linear_acceleration_covariance
+================================================================================
+MSG: std_msgs/Header
+builtin_interfaces/Time stamp
+string frame_id
+================================================================================
+MSG: builtin_interfaces/Time
+int32 sec
+uint32 nanosec
+================================================================================
+MSG: geometry_msgs/Quaternion
+float64 x 0
+float64 y 0
+float64 z 0
+float64 w 1
+================================================================================
+MSG: geometry_msgs/Vector3
+float64 x
+float64 y
+float64 z
+"""
+
+_ROS2_NUMERIC: Final = frozenset({
+    "bool", "byte", "char", "int8", "uint8", "int16", "uint16", "int32", "uint32",
+    "int64", "uint64", "float32", "float64",
+})
+_UINT64_MAX: Final = (1 << 64) - 1
+_INT64_MAX: Final = (1 << 63) - 1
+
+
+class PayloadDecodeError(RecordingFormatError):
+    """A message payload does not decode under its channel's schema.
+
+    The MCAP reader catches it and counts the message as ``decode_error``; it never leaves
+    :func:`rigtools.ingest.read`.
+    """
+
+
+class SchemaUnusableError(RecordingFormatError):
+    """A schema names a known type but cannot be used (it does not parse, or its fields differ)."""
+
+
+class SchemaRecord(NamedTuple):
+    """An MCAP Schema record, as decoders see it.
+
+    Attributes
+    ----------
+    id : int
+        Schema id (0 is "no schema" in MCAP and never appears here).
+    name : str
+        Schema name, e.g. ``"rigtools.AccelBatch"``.
+    encoding : str
+        Schema encoding: ``"protobuf"``, ``"jsonschema"``, ``"ros2msg"``, ...
+    data : bytes
+        Schema data (a FileDescriptorSet, a JSON Schema, a message definition).
+    """
+
+    id: int
+    name: str
+    encoding: str
+    data: bytes
+
+
+class AccelBatch(NamedTuple):
+    """One decoded ``rigtools.AccelBatch`` message.
+
+    Attributes
+    ----------
+    channel : str
+        Channel name (may be empty; the reader then uses the topic).
+    unit : str
+        Unit of ``values``.
+    sample_rate_Hz : float
+        Nominal sample rate (Hz).
+    first_sample_index : int
+        Absolute sample counter of ``values[0]``.
+    stamp_ns : int
+        Logger time of ``values[0]`` (ns since the UNIX epoch).
+    values : numpy.ndarray
+        float32 samples; for protobuf a read-only view into the message bytes.
+    """
+
+    channel: str
+    unit: str
+    sample_rate_Hz: float
+    first_sample_index: int
+    stamp_ns: int
+    values: np.ndarray
+
+
+class AccelBatchColumns(NamedTuple):
+    """Many ``rigtools.AccelBatch`` messages of one channel with the same length, decoded at once.
+
+    Attributes
+    ----------
+    channel, unit : str
+    sample_rate_Hz : float
+        Shared by all the messages.
+    first_sample_index : numpy.ndarray
+        int64, shape ``(m,)``.
+    stamp_ns : numpy.ndarray
+        uint64, shape ``(m,)`` (ns since the UNIX epoch).
+    values : numpy.ndarray
+        float32, shape ``(m, k)``: row ``i`` holds the samples of message ``i`` (a copy).
+    """
+
+    channel: str
+    unit: str
+    sample_rate_Hz: float
+    first_sample_index: np.ndarray
+    stamp_ns: np.ndarray
+    values: np.ndarray
+
+
+class SlowValue(NamedTuple):
+    """One decoded ``rigtools.SlowValue`` point: name, unit, time (ns) and value."""
+
+    name: str
+    unit: str
+    stamp_ns: int
+    value: float
+
+
+class ImuSample(NamedTuple):
+    """What the reader takes from a ``sensor_msgs/msg/Imu``: header stamp and acceleration.
+
+    Attributes
+    ----------
+    stamp_ns : int
+        Header stamp (ns since the UNIX epoch): ``sec * 1e9 + nanosec``.
+    ax, ay, az : float
+        ``linear_acceleration.x|y|z`` (m/s^2).
+    """
+
+    stamp_ns: int
+    ax: float
+    ay: float
+    az: float
+
+
+@dataclass(frozen=True)
+class Decoder:
+    """A payload decoder: call it on a message's bytes.
+
+    Attributes
+    ----------
+    kind : str
+        What ``decode`` returns: ``"batch"`` (:class:`AccelBatch`), ``"slow"``
+        (:class:`SlowValue`), ``"imu"`` (:class:`ImuSample`), ``"scalar"`` (float) or
+        ``"generic"`` (a decoded object for :func:`get_field`).
+    decode : callable
+        ``decode(data) -> payload``; raises :class:`PayloadDecodeError` on a malformed payload.
+    field : str or None
+        For ``"scalar"``: the name of the one numeric field.
+    decode_many : callable or None
+        ``decode_many(buffer, starts, ends)``: decode all messages lying at
+        ``buffer[starts[i]:ends[i]]`` at once, or answer None when they are not uniform
+        enough (the caller then decodes them one by one). For ``"batch"``: an
+        :class:`AccelBatchColumns`.
+    """
+
+    kind: Literal["batch", "slow", "imu", "scalar", "generic"]
+    decode: Callable[[Any], Any]
+    field: str | None = None
+    decode_many: Callable[[Any, np.ndarray, np.ndarray], Any] | None = None
+
+    def __call__(self, data: Any) -> Any:
+        """Decode one payload (same as ``decode(data)``)."""
+        return self.decode(data)
+
+
+# --------------------------------------------------------------------------------------
+# rigtools.AccelBatch: protobuf descriptor, encoder and wire-format walker
+# --------------------------------------------------------------------------------------
+
+
+@functools.cache
+def accel_batch_file_descriptor_set() -> bytes:
+    """Serialized ``FileDescriptorSet`` of ``rigtools.AccelBatch`` (the MCAP schema data).
+
+    Built with ``google.protobuf.descriptor_pb2`` to match ``data_schemas/accel_batch.proto``
+    (file ``accel_batch.proto``, package ``rigtools``, proto3), so no ``protoc`` is needed.
+    """
+    from google.protobuf import descriptor_pb2
+
+    fds = descriptor_pb2.FileDescriptorSet()
+    f = fds.file.add()
+    f.name = "accel_batch.proto"
+    f.package = "rigtools"
+    f.syntax = "proto3"
+    m = f.message_type.add()
+    m.name = "AccelBatch"
+    fdp = descriptor_pb2.FieldDescriptorProto
+    for name, number, ftype, label in ACCEL_BATCH_FIELDS:
+        fld = m.field.add()
+        fld.name = name
+        fld.number = number
+        fld.type = fdp.Type.Value(ftype)
+        fld.label = fdp.Label.Value(label)
+        fld.json_name = name
+        if label == "LABEL_REPEATED":
+            fld.options.packed = True
+    return fds.SerializeToString(deterministic=True)
+
+
+def _varint_bytes(value: int) -> bytes:
+    out = bytearray()
+    while True:
+        b = value & 0x7F
+        value >>= 7
+        if value:
+            out.append(b | 0x80)
+        else:
+            out.append(b)
+            return bytes(out)
+
+
+def _len_field(number: int, payload: bytes) -> bytes:
+    return _varint_bytes(number << 3 | 2) + _varint_bytes(len(payload)) + payload
+
+
+def encode_accel_batch_protobuf(
+    channel: str,
+    unit: str,
+    sample_rate_Hz: float,
+    first_sample_index: int,
+    stamp_ns: int,
+    values: np.ndarray,
+) -> bytes:
+    """Serialize one ``rigtools.AccelBatch`` in protobuf wire format.
+
+    Parameters
+    ----------
+    channel, unit : str
+        Channel name and unit of ``values``.
+    sample_rate_Hz : float
+        Nominal sample rate (Hz).
+    first_sample_index : int
+        Absolute sample counter of ``values[0]`` (0 to 2**64 - 1).
+    stamp_ns : int
+        Logger time of ``values[0]`` (ns since the UNIX epoch).
+    values : numpy.ndarray
+        Samples; written as little-endian float32 (packed).
+
+    Returns
+    -------
+    bytes
+        The same bytes as the protobuf library's deterministic serialization (fields in
+        number order, proto3 defaults omitted).
+    """
+    parts = []
+    if channel:
+        parts.append(_len_field(1, channel.encode("utf-8")))
+    if unit:
+        parts.append(_len_field(2, unit.encode("utf-8")))
+    if sample_rate_Hz != 0.0 or math.copysign(1.0, sample_rate_Hz) < 0:
+        parts.append(b"\x19" + struct.pack("<d", sample_rate_Hz))
+    if first_sample_index:
+        parts.append(b"\x20" + _varint_bytes(int(first_sample_index)))
+    if stamp_ns:
+        parts.append(b"\x28" + _varint_bytes(int(stamp_ns)))
+    v = np.ascontiguousarray(values, dtype="<f4")
+    if v.size:
+        parts.append(_len_field(6, v.tobytes()))
+    return b"".join(parts)
+
+
+def _read_varint(buf: memoryview, pos: int, end: int) -> tuple[int, int]:
+    result = 0
+    shift = 0
+    while True:
+        if pos >= end:
+            raise PayloadDecodeError(None, pos, "a complete varint", "the end of the message")
+        b = buf[pos]
+        pos += 1
+        result |= (b & 0x7F) << shift
+        if not b & 0x80:
+            return result & _UINT64_MAX, pos  # protobuf keeps the low 64 bits
+        shift += 7
+        if shift > 63:
+            raise PayloadDecodeError(None, pos, "a varint of at most 10 bytes", "a longer one")
+
+
+def decode_accel_batch_protobuf(data: bytes | memoryview) -> AccelBatch:
+    """Decode a protobuf ``rigtools.AccelBatch`` without the protobuf runtime.
+
+    Parameters
+    ----------
+    data : bytes or memoryview
+        The message payload.
+
+    Returns
+    -------
+    AccelBatch
+        ``values`` is a float32 view into ``data`` when the samples come in one packed run
+        (the usual case), a copy otherwise (several runs, or unpacked fixed32 fields).
+
+    Raises
+    ------
+    PayloadDecodeError
+        Truncated fields, a wire type that does not match the field, a packed run whose length
+        is not a multiple of 4, or a sample rate that is not finite and positive.
+
+    Notes
+    -----
+    The loop below handles the six fields with their proper wire types and nothing else;
+    anything unusual (unknown fields, unpacked floats) is handed to the full walker, which
+    also produces the error messages. Cost per message is a few microseconds whatever the
+    number of samples.
+    """
+    buf = data if type(data) is memoryview else memoryview(data)
+    if buf.format != "B" or buf.ndim != 1:
+        buf = buf.cast("B")
+    end = len(buf)
+    pos = 0
+    channel = unit = ""
+    rate = 0.0
+    first = stamp = 0
+    values = None
+    while pos < end:
+        key = buf[pos]
+        pos += 1
+        if key == 0x32 or key == 0x0A or key == 0x12:  # fields 6, 1, 2: length-delimited
+            if pos >= end:
+                return _decode_accel_batch_general(buf)
+            length = buf[pos]
+            if length < 0x80:
+                pos += 1
+            else:
+                length, pos = _read_varint(buf, pos, end)
+            stop = pos + length
+            if stop > end or (key == 0x32 and (length & 3 or values is not None)):
+                return _decode_accel_batch_general(buf)
+            if key == 0x32:
+                values = np.frombuffer(buf, "<f4", length >> 2, pos)
+            else:
+                try:
+                    text = str(buf[pos:stop], "utf-8")
+                except UnicodeDecodeError:
+                    return _decode_accel_batch_general(buf)
+                if key == 0x0A:
+                    channel = text
+                else:
+                    unit = text
+            pos = stop
+        elif key == 0x20 or key == 0x28:  # fields 4, 5: varint
+            v = shift = 0
+            while True:
+                if pos >= end or shift > 63:
+                    return _decode_accel_batch_general(buf)
+                b = buf[pos]
+                pos += 1
+                v |= (b & 0x7F) << shift
+                if b < 0x80:
+                    break
+                shift += 7
+            if key == 0x20:
+                first = v & _UINT64_MAX
+            else:
+                stamp = v & _UINT64_MAX
+        elif key == 0x19 and pos + 8 <= end:  # field 3: fixed64 double
+            rate = _unpack_double(buf, pos)[0]
+            pos += 8
+        else:
+            return _decode_accel_batch_general(buf)
+    if values is None:
+        values = np.zeros(0, np.float32)
+    return _checked_batch(channel, unit, rate, first, stamp, values)
+
+
+_unpack_double = struct.Struct("<d").unpack_from
+
+
+def _decode_accel_batch_general(buf: memoryview) -> AccelBatch:
+    """The full wire-format walker: any field order, unknown fields, unpacked floats."""
+    end = len(buf)
+    pos = 0
+    channel = unit = ""
+    rate = 0.0
+    first = stamp = 0
+    runs: list[np.ndarray] = []
+    loose: list[float] = []
+    while pos < end:
+        key, pos = _read_varint(buf, pos, end)
+        number, wire = key >> 3, key & 7
+        if wire == 2:
+            length, pos = _read_varint(buf, pos, end)
+            stop = pos + length
+            if stop > end:
+                raise PayloadDecodeError(None, pos, f"{length} bytes of field {number}",
+                                         f"{end - pos} left")
+            if number == 6:
+                if length % 4:
+                    raise PayloadDecodeError(None, pos, "packed float32 values (a multiple of "
+                                             "4 bytes)", f"{length} bytes")
+                runs.append(np.frombuffer(buf, "<f4", length // 4, pos))
+            elif number in (1, 2):
+                try:
+                    text = str(buf[pos:stop], "utf-8")
+                except UnicodeDecodeError as exc:
+                    raise PayloadDecodeError(None, pos, "UTF-8 text", str(exc)) from None
+                if number == 1:
+                    channel = text
+                else:
+                    unit = text
+            elif number in (3, 4, 5):
+                raise PayloadDecodeError(None, pos, f"field {number} as a scalar",
+                                         "a length-delimited field")
+            pos = stop
+        elif wire == 0:
+            value, pos = _read_varint(buf, pos, end)
+            if number == 4:
+                first = value
+            elif number == 5:
+                stamp = value
+            elif number in (1, 2, 3, 6):
+                raise PayloadDecodeError(None, pos, f"field {number} with its own wire type",
+                                         "a varint")
+        elif wire == 1:
+            if pos + 8 > end:
+                raise PayloadDecodeError(None, pos, "8 bytes", f"{end - pos} left")
+            if number == 3:
+                rate = struct.unpack_from("<d", buf, pos)[0]
+            elif number in (1, 2, 4, 5, 6):
+                raise PayloadDecodeError(None, pos, f"field {number} with its own wire type",
+                                         "a fixed64")
+            pos += 8
+        elif wire == 5:
+            if pos + 4 > end:
+                raise PayloadDecodeError(None, pos, "4 bytes", f"{end - pos} left")
+            if number == 6:
+                if runs:  # keep order between packed runs and loose values
+                    loose.extend(np.concatenate(runs).tolist())
+                    runs.clear()
+                loose.append(struct.unpack_from("<f", buf, pos)[0])
+            elif number in (1, 2, 3, 4, 5):
+                raise PayloadDecodeError(None, pos, f"field {number} with its own wire type",
+                                         "a fixed32")
+            pos += 4
+        else:
+            raise PayloadDecodeError(None, pos, "wire type 0, 1, 2 or 5", f"wire type {wire}")
+    if loose:
+        values = np.asarray(loose + (np.concatenate(runs).tolist() if runs else []), np.float32)
+    elif len(runs) == 1:
+        values = runs[0]
+    elif runs:
+        values = np.concatenate(runs)
+    else:
+        values = np.zeros(0, np.float32)
+    return _checked_batch(channel, unit, rate, first, stamp, values)
+
+
+_VARINT_SHIFTS: Final = (7 * np.arange(10)).astype(np.uint64)
+_TEN: Final = np.arange(10)
+
+
+def _varints(arr: np.ndarray, pos: np.ndarray, ends: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Decode one varint at each ``pos`` (vectorized): values, positions after, and ok."""
+    idx = pos[:, None] + _TEN
+    np.minimum(idx, arr.shape[0] - 1, out=idx)
+    b = arr[idx]
+    last = b < 0x80
+    length = last.argmax(axis=1) + 1
+    parts = (b & 0x7F).astype(np.uint64)
+    parts <<= _VARINT_SHIFTS
+    parts[_TEN >= length[:, None]] = 0
+    after = pos + length
+    ok = last.any(axis=1)
+    ok &= after <= ends
+    return np.bitwise_or.reduce(parts, axis=1), after, ok
+
+
+def _prefix_length(msg: memoryview) -> int:
+    """Bytes of the leading channel, unit and rate fields (shared by a channel's batches)."""
+    pos, end = 0, len(msg)
+    while pos < end:
+        key = msg[pos]
+        if key in (0x0A, 0x12):
+            length, p = _read_varint(msg, pos + 1, end)
+            pos = p + length
+        elif key == 0x19:
+            pos += 9
+        else:
+            break
+    return pos
+
+
+def decode_accel_batches_protobuf(
+    buf: Any, starts: np.ndarray, ends: np.ndarray
+) -> AccelBatchColumns | None:
+    """Decode many protobuf ``rigtools.AccelBatch`` messages lying in one buffer at once.
+
+    Parameters
+    ----------
+    buf : bytes-like
+        A chunk's uncompressed data.
+    starts, ends : numpy.ndarray
+        Byte range of each message payload in ``buf`` (int64, shape ``(m,)``).
+
+    Returns
+    -------
+    AccelBatchColumns or None
+        None unless every message is laid out as rigtools writes them: the same channel, unit
+        and rate bytes, then the counter and stamp varints (either may be absent when zero),
+        then one packed run of the same number of float32 values ending the message. The
+        caller then decodes the messages one by one with
+        :func:`decode_accel_batch_protobuf`, which gives exactly the same result.
+
+    Notes
+    -----
+    The varints are decoded with array operations over all messages, and the values are
+    copied with one strided copy when the messages are evenly spaced in the buffer (as
+    interleaved channels of one logger are), so the Python work is per chunk, not per message.
+    """
+    m = len(starts)
+    if m == 0:
+        return None
+    mv = memoryview(buf).cast("B") if not isinstance(buf, memoryview) else buf
+    s = np.asarray(starts, np.int64)
+    e = np.asarray(ends, np.int64)
+    try:
+        head = decode_accel_batch_protobuf(mv[s[0] : e[0]])
+    except PayloadDecodeError:
+        return None
+    plen = _prefix_length(mv[s[0] : e[0]])
+    if np.any(e - s < plen + 2):
+        return None
+    arr = np.frombuffer(mv, np.uint8)
+    if plen and not (arr[s[:, None] + np.arange(plen)] == arr[s[0] : s[0] + plen]).all():
+        return None
+    q = s + plen
+    top = arr.shape[0] - 1
+    fields = []
+    for key in (0x20, 0x28):
+        present = (arr[np.minimum(q, top)] == key) & (q < e)
+        if present.any():
+            v, after, ok = _varints(arr, q + 1, e)
+            if not ok[present].all():
+                return None
+            fields.append(np.where(present, v, np.uint64(0)))
+            q = np.where(present, after, q)
+        else:
+            fields.append(np.zeros(m, np.uint64))
+    if not np.all((arr[np.minimum(q, top)] == 0x32) & (q < e)):
+        return None
+    length, q, ok = _varints(arr, q + 1, e)
+    nbytes = int(length[0])
+    if nbytes % 4 or not ok.all() or (q + length.astype(np.int64) != e).any() \
+            or (length != nbytes).any():
+        return None
+    first, stamp = fields
+    if (first >> np.uint64(63)).any():
+        return None
+    k = nbytes // 4
+    step = int(q[1] - q[0]) if m > 1 else 0
+    if m > 1 and step >= nbytes and (q[1:] - q[:-1] == step).all():
+        rows = np.lib.stride_tricks.as_strided(arr[int(q[0]):], shape=(m, nbytes),
+                                               strides=(step, 1), writeable=False)
+        raw = np.ascontiguousarray(rows)
+    else:
+        raw = np.empty((m, nbytes), np.uint8)
+        for i, o in enumerate(q.tolist()):
+            raw[i] = arr[o : o + nbytes]
+    return AccelBatchColumns(head.channel, head.unit, head.sample_rate_Hz,
+                             first.astype(np.int64), stamp, raw.view("<f4").reshape(m, k))
+
+
+def _checked_batch(
+    channel: str, unit: str, rate: float, first: int, stamp: int, values: np.ndarray
+) -> AccelBatch:
+    if not (math.isfinite(rate) and rate > 0.0):
+        raise PayloadDecodeError(None, None, "a finite, positive sample_rate_Hz", repr(rate))
+    if first > _INT64_MAX:
+        raise PayloadDecodeError(None, None, "first_sample_index below 2**63", str(first))
+    return AccelBatch(channel, unit, float(rate), int(first), int(stamp), values)
+
+
+def decode_accel_batch_json(data: bytes | memoryview) -> AccelBatch:
+    """Decode a JSON ``rigtools.AccelBatch`` (``data_schemas/accel_batch.schema.json``).
+
+    ``values`` are cast to float32, the type the schema documents, so JSON and protobuf
+    recordings of the same samples are identical.
+
+    Raises
+    ------
+    PayloadDecodeError
+        Not JSON, not an object, a required field missing or of the wrong type.
+    """
+    try:
+        doc = json.loads(bytes(data))
+    except (UnicodeDecodeError, ValueError) as exc:
+        raise PayloadDecodeError(None, None, "a JSON object", str(exc)) from None
+    if not isinstance(doc, dict):
+        raise PayloadDecodeError(None, None, "a JSON object", type(doc).__name__)
+    try:
+        channel, unit = doc["channel"], doc["unit"]
+        rate, first, stamp = doc["sample_rate_Hz"], doc["first_sample_index"], doc["stamp_ns"]
+        raw = doc["values"]
+    except KeyError as exc:
+        raise PayloadDecodeError(None, None, "the AccelBatch fields", f"no {exc}") from None
+    if not (isinstance(channel, str) and isinstance(unit, str)):
+        raise PayloadDecodeError(None, None, "string channel and unit", f"{channel!r}, {unit!r}")
+    for name, v in (("first_sample_index", first), ("stamp_ns", stamp)):
+        if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= _UINT64_MAX:
+            raise PayloadDecodeError(None, None, f"{name} as a uint64", repr(v))
+    if isinstance(rate, bool) or not isinstance(rate, int | float):
+        raise PayloadDecodeError(None, None, "a number sample_rate_Hz", repr(rate))
+    if not isinstance(raw, list):
+        raise PayloadDecodeError(None, None, "values as an array", type(raw).__name__)
+    try:
+        values = np.asarray(raw, dtype=np.float64).astype(np.float32)
+    except (TypeError, ValueError) as exc:
+        raise PayloadDecodeError(None, None, "values as numbers", str(exc)) from None
+    if values.ndim != 1:
+        raise PayloadDecodeError(None, None, "values as a flat array", f"shape {values.shape}")
+    return _checked_batch(channel, unit, float(rate), first, stamp, values)
+
+
+def decode_slow_value_json(data: bytes | memoryview) -> SlowValue:
+    """Decode a JSON ``rigtools.SlowValue`` (see :data:`SLOW_VALUE_SCHEMA`)."""
+    try:
+        doc = json.loads(bytes(data))
+    except (UnicodeDecodeError, ValueError) as exc:
+        raise PayloadDecodeError(None, None, "a JSON object", str(exc)) from None
+    if not isinstance(doc, dict):
+        raise PayloadDecodeError(None, None, "a JSON object", type(doc).__name__)
+    name, unit = doc.get("name"), doc.get("unit")
+    stamp, value = doc.get("stamp_ns"), doc.get("value")
+    if not (isinstance(name, str) and name and isinstance(unit, str)):
+        raise PayloadDecodeError(None, None, "string name and unit", f"{name!r}, {unit!r}")
+    if isinstance(stamp, bool) or not isinstance(stamp, int) or not 0 <= stamp <= _UINT64_MAX:
+        raise PayloadDecodeError(None, None, "stamp_ns as a uint64", repr(stamp))
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise PayloadDecodeError(None, None, "a number value", repr(value))
+    return SlowValue(name, unit, stamp, float(value))
+
+
+# --------------------------------------------------------------------------------------
+# ROS 2 (CDR)
+# --------------------------------------------------------------------------------------
+
+
+def _cdr_endian(buf: bytes | memoryview) -> str:
+    if len(buf) < 4:
+        raise PayloadDecodeError(None, 0, "a 4-byte CDR encapsulation header",
+                                 f"{len(buf)} bytes")
+    kind = buf[1]
+    if buf[0] != 0 or kind not in (0, 1):
+        raise PayloadDecodeError(None, 0, "plain CDR (encapsulation 0x0000 or 0x0001)",
+                                 f"0x{buf[0]:02x}{kind:02x}")
+    return "<" if kind == 1 else ">"
+
+
+def decode_imu_cdr(data: bytes | memoryview) -> ImuSample:
+    """Read header stamp and linear acceleration from a CDR ``sensor_msgs/msg/Imu``.
+
+    Notes
+    -----
+    After the 4-byte encapsulation header the layout is fixed but for the frame id:
+    ``int32 sec, uint32 nanosec, uint32 len, char[len] frame_id``, padding to 8 bytes
+    (alignment counted from the end of the encapsulation header), then 25 float64
+    (orientation, its covariance, angular velocity, its covariance) and the three
+    float64 of ``linear_acceleration``.
+    """
+    e = _cdr_endian(data)
+    n = len(data) - 4
+    if n < 12:
+        raise PayloadDecodeError(None, 4, "an Imu header", f"{n} bytes")
+    sec, nsec, slen = struct.unpack_from(e + "iII", data, 4)
+    off = ((12 + slen + 7) & ~7) + 200
+    if off + 24 > n:
+        raise PayloadDecodeError(None, 4, f"an Imu message of at least {off + 24} bytes",
+                                 f"{n} bytes")
+    ax, ay, az = struct.unpack_from(e + "3d", data, 4 + off)
+    return ImuSample(sec * 1_000_000_000 + nsec, ax, ay, az)
+
+
+def ros2_scalar_field(schema_text: str) -> str | None:
+    """Name of the only field of a ROS 2 message definition, if it is one numeric scalar.
+
+    ``std_msgs/msg/Float64`` (``float64 data``) gives ``"data"``; a message with a header,
+    several fields, an array or a non-numeric field gives None. Constants are ignored.
+    """
+    first = re.split(r"^={3,}\s*$", schema_text, maxsplit=1, flags=re.MULTILINE)[0]
+    fields = []
+    for raw in first.splitlines():
+        line = raw.split("#", 1)[0].strip()
+        if not line:
+            continue
+        tokens = line.split()
+        if len(tokens) < 2:
+            return None
+        ftype, rest = tokens[0], " ".join(tokens[1:])
+        if re.match(r"^[A-Z][A-Z0-9_]*\s*=", rest):
+            continue  # a constant
+        fields.append((ftype, tokens[1]))
+    if len(fields) != 1:
+        return None
+    ftype, fname = fields[0]
+    return fname if ftype in _ROS2_NUMERIC else None
+
+
+def _generic_ros2(schema: SchemaRecord) -> Callable[[Any], Any]:
+    from mcap_ros2._dynamic import generate_dynamic
+
+    try:
+        types = generate_dynamic(schema.name, schema.data.decode("utf-8"))
+    except Exception as exc:  # a third-party parser: reported, never hidden
+        raise SchemaUnusableError(None, f"schema {schema.id}", f"a ros2msg definition of "
+                                  f"{schema.name!r}", f"{type(exc).__name__}: {exc}") from None
+    if schema.name not in types:
+        raise SchemaUnusableError(None, f"schema {schema.id}",
+                                  f"a definition of {schema.name!r}", "none in the schema")
+    fn = types[schema.name]
+
+    def decode(data: Any) -> Any:
+        try:
+            return fn(bytes(data))
+        except Exception as exc:  # third-party decoder: counted as decode_error
+            raise PayloadDecodeError(None, None, f"a CDR {schema.name}",
+                                     f"{type(exc).__name__}: {exc}") from None
+
+    return decode
+
+
+def _generic_json(data: Any) -> Any:
+    try:
+        return json.loads(bytes(data))
+    except (UnicodeDecodeError, ValueError) as exc:
+        raise PayloadDecodeError(None, None, "JSON", str(exc)) from None
+
+
+def _accel_batch_descriptor_matches(data: bytes) -> bool:
+    from google.protobuf import descriptor_pb2
+    from google.protobuf.message import DecodeError
+
+    fds = descriptor_pb2.FileDescriptorSet()
+    try:
+        fds.ParseFromString(data)
+    except DecodeError:
+        return False
+    fdp = descriptor_pb2.FieldDescriptorProto
+    for f in fds.file:
+        for m in f.message_type:
+            if f"{f.package}.{m.name}" != ACCEL_BATCH_SCHEMA_NAME:
+                continue
+            got = {(x.name, x.number, fdp.Type.Name(x.type), fdp.Label.Name(x.label))
+                   for x in m.field}
+            return set(ACCEL_BATCH_FIELDS) <= got
+    return False
+
+
+def decoder_for(
+    message_encoding: str, schema: SchemaRecord | None, *, generic: bool = False
+) -> Decoder | None:
+    """Choose the decoder of a channel from its message encoding and schema.
+
+    Parameters
+    ----------
+    message_encoding : str
+        The channel's ``message_encoding`` (``"protobuf"``, ``"json"``, ``"cdr"``, ...).
+    schema : SchemaRecord or None
+        The channel's schema; None for schemaless channels.
+    generic : bool
+        Answer a ``"generic"`` decoder (whole decoded message, for a mapping's dotted
+        field path) instead of the specialised one.
+
+    Returns
+    -------
+    Decoder or None
+        None when rigtools has no decoder for this combination (the caller counts the
+        channel's messages as ``no_decoder``).
+
+    Raises
+    ------
+    SchemaUnusableError
+        The schema names a type rigtools knows but does not parse or has other fields.
+    """
+    if schema is None:
+        return Decoder("generic", _generic_json) if generic and message_encoding == "json" \
+            else None
+    return _decoder_for(message_encoding, schema, generic)
+
+
+@functools.lru_cache(maxsize=256)
+def _decoder_for(message_encoding: str, schema: SchemaRecord, generic: bool) -> Decoder | None:
+    name, enc = schema.name, schema.encoding
+    if message_encoding == "protobuf" and enc == "protobuf" and name == ACCEL_BATCH_SCHEMA_NAME:
+        if not _accel_batch_descriptor_matches(schema.data):
+            raise SchemaUnusableError(None, f"schema {schema.id}", "the fields of "
+                                      "data_schemas/accel_batch.proto", "a different descriptor")
+        return Decoder("batch", decode_accel_batch_protobuf,
+                       decode_many=decode_accel_batches_protobuf)
+    if message_encoding == "json":
+        if generic:
+            return Decoder("generic", _generic_json)
+        if name == ACCEL_BATCH_SCHEMA_NAME:
+            return Decoder("batch", decode_accel_batch_json)
+        if name == SLOW_VALUE_SCHEMA_NAME:
+            return Decoder("slow", decode_slow_value_json)
+        return None
+    if message_encoding == "cdr" and enc == "ros2msg":
+        if generic:
+            return Decoder("generic", _generic_ros2(schema))
+        if name in (IMU_SCHEMA_NAME, "sensor_msgs/Imu"):
+            return Decoder("imu", decode_imu_cdr)
+        text = schema.data.decode("utf-8", errors="replace")
+        fname = ros2_scalar_field(text)
+        if fname is None:
+            return None
+        decode = _generic_ros2(schema)
+
+        def scalar(data: Any, _decode: Callable[[Any], Any] = decode,
+                   _field: str = fname) -> float:
+            return float(getattr(_decode(data), _field))
+
+        return Decoder("scalar", scalar, fname)
+    return None
+
+
+# --------------------------------------------------------------------------------------
+# Dotted field paths
+# --------------------------------------------------------------------------------------
+
+_MISSING: Final = object()
+
+
+def get_field(obj: Any, path: str) -> Any:
+    """Follow a dotted path (``linear_acceleration.x``, ``data.3`` or ``data[3]``) into a message.
+
+    Works on decoded ROS 2 objects (attributes), JSON objects (keys) and sequences
+    (integer components).
+
+    Raises
+    ------
+    KeyError
+        A component of the path does not exist; the message names it.
+    """
+    cur = obj
+    for part in re.split(r"\.|\[(\d+)\]", path):
+        if not part:
+            continue
+        nxt = _MISSING
+        if isinstance(cur, dict):
+            nxt = cur.get(part, _MISSING)
+        elif isinstance(cur, list | tuple | bytes | np.ndarray) and part.isdigit():
+            i = int(part)
+            nxt = cur[i] if i < len(cur) else _MISSING
+        elif not part.startswith("_"):
+            nxt = getattr(cur, part, _MISSING)
+        if nxt is _MISSING:
+            raise KeyError(f"no field {part!r} in path {path!r}")
+        cur = nxt
+    return cur
+
+
+def message_stamp_ns(obj: Any) -> int | None:
+    """The header stamp of a decoded message (ns), or None when it has none.
+
+    Looks for ``header.stamp.sec``/``nanosec`` (ROS 2) or a top-level ``stamp_ns`` (JSON).
+    """
+    try:
+        stamp = get_field(obj, "header.stamp")
+        return int(get_field(stamp, "sec")) * 1_000_000_000 + int(get_field(stamp, "nanosec"))
+    except (KeyError, TypeError, ValueError):
+        pass
+    try:
+        v = get_field(obj, "stamp_ns")
+    except KeyError:
+        return None
+    return int(v) if isinstance(v, int) and not isinstance(v, bool) else None

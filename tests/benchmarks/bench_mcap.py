@@ -1,0 +1,176 @@
+"""Benchmark: MCAP ingest against the mcap library's bare message iteration.
+
+Writes a 60 s, 4-channel, 25.6 kHz recording of protobuf ``rigtools.AccelBatch`` messages
+(1024 samples each, 1 MiB chunks), once with zstd and once with lz4 chunks, and prints for each:
+
+* ``read``: samples per second of ``rigtools.ingest.read`` (everything: SHA-256 of the file,
+  container, decoding, the builder's float64 grid and validity mask, provenance);
+* ``mcap bare``: time of ``make_reader(f).iter_messages()`` with no decoding over the same file;
+* ``ratio`` = mcap bare / read (target >= 1.0: the full ingest at least as fast as mcap's bare
+  iteration);
+* ``decompress only``: chunk decompression alone, the ceiling for any reader;
+* a breakdown of ``read``: rigtools' container layer alone (``iter_messages``), ``ingest``
+  into a builder without building (and its ratio to mcap's bare iteration), and the SHA-256
+  of the file.
+
+Run it as a script (``python tests/benchmarks/bench_mcap.py``) or with pytest
+(``pytest tests/benchmarks/bench_mcap.py -m benchmark -s``); the default test run skips it.
+Times are the best of several repeats.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.benchmark
+
+DURATION_S = 60.0
+N_CHANNELS = 4
+FS = 25_600.0
+REPEATS = 5
+
+
+def _best(fn: Callable[[], object], repeats: int = REPEATS) -> float:
+    best = float("inf")
+    for _ in range(repeats):
+        t = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t)
+    return best
+
+
+def write_recording(path: Path, compression: str) -> Path:
+    """The benchmark recording: 4 channels of float32 noise with a 50 Hz tone."""
+    from rigtools.demo.mcap_writer import write_accel_mcap
+
+    n = int(DURATION_S * FS)
+    rng = np.random.default_rng(42)
+    t = np.arange(n) / FS
+    chans = {
+        f"accel_{i + 1}": ((np.sin(2 * np.pi * 50.0 * t) + 0.1 * rng.standard_normal(n))
+                           .astype(np.float32), FS, "m/s^2", 0, 1_700_000_000.0)
+        for i in range(N_CHANNELS)
+    }
+    return write_accel_mcap(path, chans, compression=compression, batch=1024)
+
+
+def _decompress_all(chunks: list[tuple[str, bytes, int]]) -> int:
+    import lz4.frame
+    import zstandard
+
+    d = zstandard.ZstdDecompressor()
+    total = 0
+    for comp, data, usize in chunks:
+        if comp == "zstd":
+            total += len(d.decompress(data, max_output_size=usize))
+        elif comp == "lz4":
+            total += len(lz4.frame.decompress(data))
+        else:
+            total += len(data)
+    return total
+
+
+def measure(path: Path) -> dict[str, float]:
+    """Times (s) and rates for one file."""
+    from mcap.reader import make_reader
+    from mcap.records import Chunk
+    from mcap.stream_reader import StreamReader
+
+    from rigtools.ingest import read
+    from rigtools.ingest.builder import RecordingBuilder
+    from rigtools.ingest.mcap import ingest, iter_messages
+    from rigtools.ingest.recording import IngestReport
+
+    n_samples = int(DURATION_S * FS) * N_CHANNELS
+    rec = read(path)
+    got = sum(len(c) for c in rec.channels.values())
+    if got != n_samples or rec.report.has_losses:
+        raise RuntimeError(f"benchmark file read wrong: {got} samples, {rec.report.to_dict()}")
+
+    def bare() -> int:
+        with open(path, "rb") as f:
+            return sum(1 for _ in make_reader(f).iter_messages())
+
+    def container() -> int:
+        with open(path, "rb") as f:
+            return sum(1 for _ in iter_messages(f, str(path), IngestReport("messages")))
+
+    def ingest_only() -> None:
+        rep = IngestReport("messages")
+        with open(path, "rb") as f:
+            ingest(f, str(path), RecordingBuilder(str(path), rep), rep, None)
+
+    def sha() -> str:
+        return hashlib.sha256(path.read_bytes()).hexdigest()
+
+    with open(path, "rb") as f:
+        chunks = [(r.compression, r.data, r.uncompressed_size)
+                  for r in StreamReader(f, emit_chunks=True).records if isinstance(r, Chunk)]
+    uncompressed = _decompress_all(chunks)
+    out = {
+        "read_s": _best(lambda: read(path)),
+        "mcap_bare_s": _best(bare),
+        "decompress_s": _best(lambda: _decompress_all(chunks)),
+        "container_s": _best(container),
+        "ingest_s": _best(ingest_only),
+        "sha256_s": _best(sha),
+        "samples": float(n_samples),
+        "uncompressed_bytes": float(uncompressed),
+        "file_bytes": float(path.stat().st_size),
+        "messages": float(bare()),
+    }
+    out["ratio"] = out["mcap_bare_s"] / out["read_s"]
+    out["ratio_ingest"] = out["mcap_bare_s"] / out["ingest_s"]
+    return out
+
+
+def report(name: str, m: dict[str, float]) -> str:
+    """Human-readable lines for one file."""
+    mb = m["uncompressed_bytes"] / 1e6
+    lines = [
+        f"{name}: {m['file_bytes'] / 1e6:.1f} MB file, {mb:.1f} MB uncompressed, "
+        f"{int(m['messages'])} messages, {int(m['samples'])} samples",
+        f"  rigtools.ingest.read      {m['read_s'] * 1e3:8.1f} ms  "
+        f"{m['samples'] / m['read_s'] / 1e6:7.1f} Msamples/s",
+        f"  mcap bare iter_messages   {m['mcap_bare_s'] * 1e3:8.1f} ms",
+        f"  ratio mcap bare / read    {m['ratio']:8.2f}   (target >= 1.0)",
+        f"  decompress only (ceiling) {m['decompress_s'] * 1e3:8.1f} ms  "
+        f"{mb / m['decompress_s']:7.0f} MB/s  {m['samples'] / m['decompress_s'] / 1e6:7.1f} "
+        "Msamples/s",
+        f"  breakdown: container {m['container_s'] * 1e3:.1f} ms, ingest (no build) "
+        f"{m['ingest_s'] * 1e3:.1f} ms, sha256 {m['sha256_s'] * 1e3:.1f} ms; "
+        f"the rest of read is the builder's grid and provenance",
+        f"  ratio mcap bare / ingest  {m['ratio_ingest']:8.2f}   (container + decoding, "
+        "no hashing, no build)",
+    ]
+    return "\n".join(lines)
+
+
+def run(directory: Path) -> dict[str, dict[str, float]]:
+    """Write both files in ``directory``, measure and print."""
+    results = {}
+    for comp in ("zstd", "lz4"):
+        p = write_recording(directory / f"bench_{comp}.mcap", comp)
+        results[comp] = measure(p)
+        print(report(comp, results[comp]), flush=True)
+    return results
+
+
+def test_bench_mcap(tmp_path):
+    results = run(tmp_path)
+    for m in results.values():
+        assert m["read_s"] > 0 and m["mcap_bare_s"] > 0
+
+
+if __name__ == "__main__":
+    with tempfile.TemporaryDirectory() as d:
+        run(Path(d))
+    sys.exit(0)

@@ -1,0 +1,287 @@
+"""End to end: a synthetic reference-layout recording, written in every CAN log format, read back.
+
+samples -> ``encode_reference_frames`` -> python-can's (or rigtools') writers -> ``rigtools.ingest
+.read`` -> channels equal to the int16-quantised input exactly, slow signals right, and every
+frame that did not make it accounted for (gaps, duplicates, counter wraps, ids absent from the
+DBC, short payloads, error and remote frames).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import can
+import numpy as np
+import pytest
+
+from rigtools.demo.can_writer import (
+    encode_reference_frames,
+    quantise_reference,
+    write_can_log,
+)
+from rigtools.ingest import read
+from rigtools.ingest.frames import CanFrameBatch, concat
+
+FS = 25_600.0
+N_FRAMES = 3000  # per channel: 9000 samples, 0.35 s
+FIRST_COUNTER = 65_000  # the 16-bit counter wraps after 536 frames
+START = 1_700_000_000.0
+LATENCY = 250e-6
+SPEED = np.array([1500.0, 1500.25, 1501.0, 1502.5])  # one per slow frame (10 Hz, 4 frames)
+
+READER_MODULES = {"blf": "blf", "log": "candump", "asc": "asc", "trc": "trc", "csv": "csv_log"}
+
+
+def _needs_reader(fmt: str) -> None:
+    """Skip formats whose reader module is not written yet (parallel work)."""
+    if importlib.util.find_spec(f"rigtools.ingest.{READER_MODULES[fmt]}") is None:
+        pytest.skip(f"rigtools.ingest.{READER_MODULES[fmt]} does not exist yet")
+
+
+@pytest.fixture(scope="module")
+def source():
+    rng = np.random.default_rng(42)
+    t = np.arange(3 * N_FRAMES) / FS
+    chans = [40 * np.sin(2 * np.pi * (400 * (i + 1)) * t) + rng.normal(0, 5, t.size)
+             for i in range(4)]
+    chans[3][:10] = [1e6, -1e6, 491.6, -491.6, 0.0075, -0.0075, 0.0225, 0, 0, 0]  # clip, ties
+    slow = {"Torque_Nm": 302.0, "PinionSpeed_rpm": SPEED, "OilTemp_C": 90.5}
+    frames = encode_reference_frames(chans, slow, start_time_s=START, latency_s=LATENCY,
+                                     first_counter=FIRST_COUNTER, rng=7)
+    return chans, frames, quantise_reference(chans)
+
+
+def _check_channels(rec, want: dict[str, np.ndarray]) -> None:
+    assert sorted(rec.channels) == sorted(want)
+    for name, values in want.items():
+        ch = rec.channels[name]
+        assert ch.first_index == 3 * FIRST_COUNTER
+        assert ch.sample_rate_Hz == FS
+        assert ch.valid.all()
+        np.testing.assert_array_equal(ch.values, values, err_msg=name)
+
+
+@pytest.mark.parametrize(
+    ("fmt", "engine"),
+    [("blf", "python-can"), ("blf", "rigtools"), ("log", "python-can"), ("log", "rigtools"),
+     ("asc", "python-can"), ("trc", "python-can"), ("csv", "python-can")],
+)
+def test_every_format_reads_back_the_quantised_input_exactly(tmp_path, source, fmt, engine):
+    _needs_reader(fmt)
+    _, frames, want = source
+    path = write_can_log(tmp_path / f"run.{fmt}", frames, fmt, engine=engine)
+    rec = read(path)
+    _check_channels(rec, want)
+    assert rec.report.n_rejected == 0 and rec.report.gaps == []
+    assert rec.report.decoded == len(frames)
+    np.testing.assert_array_equal(rec.slow["PinionSpeed_rpm"].values, SPEED)
+    np.testing.assert_array_equal(rec.slow["Torque_Nm"].values, [302.0] * 4)
+    np.testing.assert_array_equal(rec.slow["OilTemp_C"].values, [90.5] * 4)
+    assert rec.slow["Torque_Nm"].unit == "N.m"
+    # slow frames every 0.1 s (jitter below 20 µs, format resolution 1 µs or better); ASC
+    # keeps times relative to its start, the others absolute
+    t = rec.slow["PinionSpeed_rpm"].time_s
+    np.testing.assert_allclose(np.diff(t), 0.1, atol=30e-6)
+    if fmt != "asc":
+        assert abs(t[0] - (START + LATENCY)) < 30e-6
+    assert rec.provenance.reader == ("candump" if fmt == "log" else fmt)
+
+
+def test_quantisation_rounds_clips_and_matches_the_dbc_scale(source):
+    chans, _, want = source
+    q = want["accel_4"]
+    assert q[0] == 32767 * 0.015 and q[1] == -32768 * 0.015  # clipped to int16
+    assert q[2] == 32767 * 0.015 and q[3] == -32768 * 0.015
+    np.testing.assert_array_equal(q[4:7], [0.0, -0.0, 2 * 0.015])  # round half to even
+    assert np.max(np.abs(want["accel_1"] - chans[0])) <= 0.0075 + 1e-12
+
+
+def test_blf_and_candump_writers_of_rigtools_equal_python_cans_bytes(tmp_path, source):
+    _, frames, _ = source
+    part = frames.take(np.arange(2500))
+    for fmt in ("blf", "log"):
+        a = write_can_log(tmp_path / f"a.{fmt}", part, fmt, engine="python-can")
+        b = write_can_log(tmp_path / f"b.{fmt}", part, fmt, engine="rigtools")
+        assert a.read_bytes() == b.read_bytes(), fmt
+
+
+def test_write_can_log_refuses_unknown_formats_and_engines(tmp_path, source):
+    _, frames, _ = source
+    with pytest.raises(ValueError, match="`fmt` must be one of"):
+        write_can_log(tmp_path / "x.mf4", frames)
+    with pytest.raises(ValueError, match="writes blf and log only"):
+        write_can_log(tmp_path / "x.asc", frames, engine="rigtools")
+    with pytest.raises(ValueError, match="`engine` must be"):
+        write_can_log(tmp_path / "x.blf", frames, engine="vector")  # type: ignore[arg-type]
+
+
+def test_encode_refuses_bad_input():
+    with pytest.raises(ValueError, match="multiple of 3"):
+        encode_reference_frames([np.zeros(10)])
+    with pytest.raises(ValueError, match="must be finite"):
+        encode_reference_frames([np.array([0.0, np.nan, 0.0])])
+    with pytest.raises(ValueError, match="not a slow signal"):
+        encode_reference_frames([np.zeros(3)], {"Nope": 1.0})
+    with pytest.raises(ValueError, match="one per slow frame"):
+        encode_reference_frames([np.zeros(3 * 2560)], {"Torque_Nm": np.zeros(4)})
+    with pytest.raises(ValueError, match="not channels of the layout"):
+        encode_reference_frames({"accel_9": np.zeros(3)})
+
+
+def test_counters_wrap_and_frames_are_in_time_order(source):
+    _, frames, _ = source
+    acc1 = frames.take(frames.arbitration_id == 256)
+    counter = acc1.data[:, 0].astype(np.int64) | (acc1.data[:, 1].astype(np.int64) << 8)
+    assert counter[0] == FIRST_COUNTER and counter[536] == 0
+    assert np.all(np.diff(frames.timestamp_s) >= 0)
+
+
+# -- losses, read through the whole pipeline ----------------------------------------------------
+
+
+def _rows(frames: CanFrameBatch, frame_id: int) -> np.ndarray:
+    return np.flatnonzero(frames.arbitration_id == frame_id)
+
+
+def _with_length(frames: CanFrameBatch, row: int, length: int) -> CanFrameBatch:
+    lengths = frames.length.copy()
+    data = frames.data.copy()
+    lengths[row] = length
+    data[row, length:] = 0
+    return CanFrameBatch(frames.timestamp_s, frames.arbitration_id, frames.is_extended,
+                         frames.is_fd, lengths, data, frames.channel, frames.position,
+                         frames.position_unit)
+
+
+def _sorted(batch: CanFrameBatch) -> CanFrameBatch:
+    return batch.take(np.argsort(batch.timestamp_s, kind="stable"))
+
+
+def _foreign(n: int, t0: float) -> CanFrameBatch:
+    return CanFrameBatch(t0 + np.arange(n) * 1e-3, np.full(n, 0x700, np.uint32),
+                         np.zeros(n, bool), np.zeros(n, bool), np.full(n, 8, np.uint8),
+                         np.zeros((n, 8), np.uint8), np.zeros(n, np.int16),
+                         np.arange(n, dtype=np.int64), "byte")
+
+
+@pytest.fixture(scope="module")
+def damaged(source):
+    """The source frames with frames dropped, duplicated, shortened and foreign ids added."""
+    _, frames, want = source
+    keep = np.ones(len(frames), bool)
+    acc1 = _rows(frames, 256)
+    keep[acc1[100:110]] = False  # 10 frames lost: a 30-sample gap
+    acc3 = _rows(frames, 258)
+    keep[acc3[530:546]] = False  # 16 frames lost across the counter wrap (65530..9)
+    lossy = frames.take(keep)
+    acc4 = _rows(lossy, 259)
+    lossy = _with_length(lossy, int(acc4[200]), 4)  # DLC shorter than the DBC's 8
+    acc2 = _rows(lossy, 257)
+    dup = lossy.take(acc2[50:51])  # the same frame logged twice
+    lossy = _sorted(concat([lossy, dup, _foreign(5, START + 0.01)]))
+    expected = {k: v.copy() for k, v in want.items()}
+    missing = {"accel_1": np.arange(300, 330), "accel_3": np.arange(1590, 1638),
+               "accel_4": np.arange(600, 603)}
+    for name, idx in missing.items():
+        expected[name][idx] = np.nan
+    return lossy, expected, missing
+
+
+@pytest.mark.parametrize("fmt", ["blf", "log"])
+def test_gaps_duplicates_wraps_foreign_ids_and_short_frames_are_accounted(tmp_path, damaged,
+                                                                         fmt):
+    lossy, expected, missing = damaged
+    rec = read(write_can_log(tmp_path / f"lossy.{fmt}", lossy, fmt))
+    for name, values in expected.items():
+        ch = rec.channels[name]
+        assert ch.first_index == 3 * FIRST_COUNTER and len(ch) == 3 * N_FRAMES
+        np.testing.assert_array_equal(ch.values, values, err_msg=name)
+        invalid = np.flatnonzero(~ch.valid)
+        np.testing.assert_array_equal(invalid, missing.get(name, []), err_msg=name)
+    gaps = {(g.channel, g.start_index, g.n_missing) for g in rec.report.gaps}
+    first = 3 * FIRST_COUNTER
+    assert gaps == {("accel_1", first + 300, 30), ("accel_3", first + 1590, 48),
+                    ("accel_4", first + 600, 3)}
+    assert rec.report.rejected == {"id_not_in_dbc": 5, "dlc_shorter_than_dbc": 1,
+                                   "duplicate_frame": 1}
+    where = rec.report.first_position["id_not_in_dbc"]
+    assert where.startswith("byte " if fmt == "blf" else "line ")
+
+
+def test_error_and_remote_frames_are_counted_through_read(tmp_path, source):
+    _, frames, want = source
+    part = frames
+    msgs = []
+    for i in range(len(part)):
+        n = int(part.length[i])
+        msgs.append(can.Message(timestamp=float(part.timestamp_s[i]),
+                                arbitration_id=int(part.arbitration_id[i]),
+                                is_extended_id=False, data=bytes(part.data[i, :n]), channel=0))
+        if i % 1000 == 7:
+            msgs.append(can.Message(timestamp=float(part.timestamp_s[i]), is_error_frame=True,
+                                    channel=0))
+        if i % 1000 == 9:
+            msgs.append(can.Message(timestamp=float(part.timestamp_s[i]), arbitration_id=256,
+                                    is_extended_id=False, is_remote_frame=True, dlc=8,
+                                    channel=0))
+    for fmt, writer in (("blf", can.BLFWriter), ("log", can.CanutilsLogWriter)):
+        path = Path(tmp_path / f"errors.{fmt}")
+        with writer(str(path)) as w:
+            for m in msgs:
+                w.on_message_received(m)
+        rec = read(path)
+        n_err = sum(1 for i in range(len(part)) if i % 1000 == 7)
+        n_rtr = sum(1 for i in range(len(part)) if i % 1000 == 9)
+        assert rec.report.rejected == {"error_frame": n_err, "remote_frame": n_rtr}, fmt
+        _check_channels(rec, want)
+
+
+def test_truncated_blf_reads_the_intact_prefix_through_read(tmp_path, source):
+    _, frames, want = source
+    path = write_can_log(tmp_path / "run.blf", frames, "blf")
+    raw = path.read_bytes()
+    cut = tmp_path / "cut.blf"
+    cut.write_bytes(raw[: len(raw) * 2 // 3])
+    rec = read(cut)
+    lost = {"truncated_container", "truncated_object"} & set(rec.report.rejected)
+    assert lost
+    for name, values in want.items():
+        ch = rec.channels[name]
+        assert 0 < len(ch) < values.size
+        np.testing.assert_array_equal(ch.values, values[: len(ch)])
+
+
+@pytest.mark.parametrize("fmt", ["blf", "log"])
+def test_gzipped_logs_read_like_the_plain_ones(tmp_path, source, fmt):
+    import gzip
+
+    _, frames, want = source
+    path = write_can_log(tmp_path / f"run.{fmt}", frames, fmt, engine="rigtools")
+    gz = tmp_path / f"run.{fmt}.gz"
+    gz.write_bytes(gzip.compress(path.read_bytes()))
+    plain, packed = read(path), read(gz)
+    _check_channels(packed, want)
+    for name in want:
+        assert packed.channels[name].equals(plain.channels[name])
+    assert packed.report.to_dict() == plain.report.to_dict()
+
+
+def test_content_decides_the_reader_whatever_the_suffix(tmp_path, source):
+    from rigtools.ingest.registry import detect_format
+
+    _, frames, want = source
+    part = frames.take(np.arange(600))
+    blf_named_log = write_can_log(tmp_path / "x.blf", part, "blf").rename(tmp_path / "blf.log")
+    log_named_txt = write_can_log(tmp_path / "x.log", part, "log").rename(tmp_path / "dump.txt")
+    assert detect_format(blf_named_log) == "blf"
+    assert detect_format(log_named_txt) == "candump"
+    for fmt in ("asc", "trc", "csv"):
+        if importlib.util.find_spec(f"rigtools.ingest.{READER_MODULES[fmt]}") is None:
+            continue
+        other = write_can_log(tmp_path / f"x.{fmt}", part, fmt).rename(tmp_path / f"{fmt}.dat")
+        assert detect_format(other) == fmt
+    rec = read(log_named_txt)
+    assert rec.provenance.reader == "candump"
+    np.testing.assert_array_equal(rec.channels["accel_1"].values,
+                                  want["accel_1"][: len(rec.channels["accel_1"])])
