@@ -93,8 +93,9 @@ def synthetic_run(
     t = np.arange(n) / fs
     f_mesh = z1 * speed_rpm / 60.0
     amps = (4.0, 1.5, 0.8)
-    # Second-order resonance as a digital filter (bilinear transform of the SDOF FRF).
-    wn = 2 * np.pi * f_n_Hz
+    # Second-order resonance as a digital filter: bilinear transform of the SDOF FRF with the
+    # natural frequency prewarped, so the digital peak sits at f_n, not at (fs/pi) atan(pi f_n/fs).
+    wn = 2 * fs * np.tan(np.pi * f_n_Hz / fs)
     b, a = sps.bilinear([wn**2], [1.0, 2 * zeta * wn, wn**2], fs)
     channels = {}
     for k in range(n_channels):
