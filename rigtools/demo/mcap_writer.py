@@ -2,9 +2,8 @@
 
 * :func:`write_accel_mcap` writes accelerometer channels as ``rigtools.AccelBatch`` messages
   (protobuf or JSON, ``data_schemas/accel_batch.*``), slow signals as ``rigtools.SlowValue``
-  JSON messages (one point per message, schema
-  :data:`rigtools.ingest.mcap_decoders.SLOW_VALUE_SCHEMA`) and the run metadata as a
-  Metadata record named ``rigtools.run``;
+  JSON messages (one point per message, schema ``data_schemas/slow_value.schema.json``,
+  embedded byte for byte) and the run metadata as a Metadata record named ``rigtools.run``;
 * :func:`write_imu_mcap` writes ROS 2 ``sensor_msgs/msg/Imu`` messages (and optional
   ``std_msgs/msg/Float64`` topics) with ``mcap-ros2-support``, as a ROS 2 robot would.
 
@@ -18,7 +17,7 @@ import json
 import math
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -26,13 +25,16 @@ from rigtools.ingest.mcap_decoders import (
     ACCEL_BATCH_SCHEMA_NAME,
     IMU_SCHEMA_NAME,
     IMU_SCHEMA_TEXT,
-    SLOW_VALUE_SCHEMA,
+    SLOW_VALUE_SCHEMA_FILE,
     SLOW_VALUE_SCHEMA_NAME,
     accel_batch_file_descriptor_set,
     encode_accel_batch_protobuf,
 )
 from rigtools.ingest.recording import RunMetadata
 from rigtools.schemas import schema_path
+
+if TYPE_CHECKING:
+    from mcap.records import Schema
 
 __all__ = ["flatten_run_metadata", "write_accel_mcap", "write_imu_mcap"]
 
@@ -132,6 +134,7 @@ def write_accel_mcap(
     if encoding not in ("protobuf", "json"):
         raise ValueError(f"`encoding` must be 'protobuf' or 'json', was {encoding!r}")
     out = Path(path)
+    slow_points: Mapping[str, tuple[np.ndarray, np.ndarray, str]] = slow or {}
     events: list[tuple[int, int, str, int]] = []  # (log_time_ns, order, kind:name, k)
     order = 0
     for name, (values, fs, _unit, _first, t0) in channels.items():
@@ -140,7 +143,7 @@ def write_accel_mcap(
             last = min(n, (k + 1) * batch) - 1
             events.append((_to_ns(t0 + (_first + last) / fs), order, name, k))
             order += 1
-    for name, (time_s, _v, _unit) in (slow or {}).items():
+    for name, (time_s, _v, _unit) in slow_points.items():
         for k, t in enumerate(np.asarray(time_s, np.float64)):
             events.append((_to_ns(float(t)), order, "\0" + name, k))
             order += 1
@@ -163,15 +166,16 @@ def write_accel_mcap(
         chan_ids = {name: w.register_channel(f"/accel/{name}", encoding, sid)
                     for name in channels}
         slow_ids: dict[str, int] = {}
-        if slow:
+        if slow_points:
             ssid = w.register_schema(SLOW_VALUE_SCHEMA_NAME, "jsonschema",
-                                     json.dumps(SLOW_VALUE_SCHEMA).encode())
-            slow_ids = {name: w.register_channel(f"/slow/{name}", "json", ssid) for name in slow}
+                                     schema_path(SLOW_VALUE_SCHEMA_FILE).read_bytes())
+            slow_ids = {name: w.register_channel(f"/slow/{name}", "json", ssid)
+                        for name in slow_points}
         seq: dict[str, int] = {}
         for log_ns, _o, key, k in events:
             if key.startswith("\0"):
                 name = key[1:]
-                time_s, vals, unit = slow[name]  # type: ignore[index]
+                time_s, vals, unit = slow_points[name]
                 t = float(np.asarray(time_s, np.float64)[k])
                 data = json.dumps({"name": name, "unit": unit, "stamp_ns": _to_ns(t),
                                    "value": float(np.asarray(vals, np.float64)[k])}).encode()
@@ -252,17 +256,19 @@ def write_imu_mcap(
         events: list[tuple[int, int, str, int]] = [
             (_to_ns(float(t) + log_delay_s), i, topic, i) for i, t in enumerate(stamps)
         ]
-        f64 = None
+        float64_topics: dict[str, tuple[Schema, np.ndarray]] = {}
         if scalars:
             f64 = w.register_msgdef("std_msgs/msg/Float64", "float64 data\n")
-            for name, (ts, _v) in scalars.items():
+            for name, (ts, values) in scalars.items():
+                float64_topics[name] = (f64, values)
                 events += [(_to_ns(float(t)), len(events) + j, "\0" + name, j)
                            for j, t in enumerate(np.asarray(ts, np.float64))]
         events.sort()
         for log_ns, _o, key, k in events:
             if key.startswith("\0"):
                 name = key[1:]
-                w.write_message(name, f64, {"data": float(scalars[name][1][k])},  # type: ignore[index]
+                schema, values = float64_topics[name]
+                w.write_message(name, schema, {"data": float(values[k])},
                                 log_time=log_ns, sequence=k)
                 continue
             t_ns = _to_ns(float(stamps[k]))

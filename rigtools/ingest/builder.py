@@ -264,14 +264,21 @@ class RecordingBuilder:
                 values[lo : int(bs[r]) + k] = conv_rows[r, sk:]
                 if not complete:
                     valid[lo : int(bs[r]) + k] = True
+        # Integer samples with finite scales cannot be NaN or Inf: skip the pass over them.
+        may_be_nonfinite = any(
+            b.raw.dtype.kind not in "iub" or any(abs(sc) > 1e200 for sc, _ in b.conversion)
+            for b in blocks
+        )
         parts.blocks = []
-        nonfinite = valid & ~np.isfinite(values)
-        n_nonfinite = int(nonfinite.sum())
-        if n_nonfinite:
-            valid &= ~nonfinite
-            at = int(np.flatnonzero(nonfinite)[0]) + first
-            self.report.reject("non_finite_sample", n_nonfinite, f"channel {name!r} index {at}")
-        del nonfinite
+        if may_be_nonfinite:
+            nonfinite = valid & ~np.isfinite(values)
+            n_nonfinite = int(nonfinite.sum())
+            if n_nonfinite:
+                valid &= ~nonfinite
+                at = int(np.flatnonzero(nonfinite)[0]) + first
+                self.report.reject("non_finite_sample", n_nonfinite,
+                                   f"channel {name!r} index {at}")
+            del nonfinite
         # Start time: exact when the source states it, else from the logger stamps.
         if parts.start_time_s is not None:
             t0 = parts.start_time_s

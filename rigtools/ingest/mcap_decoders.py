@@ -31,7 +31,8 @@ from its CDR layout; every other ROS 2 message goes through ``mcap-ros2-support`
 CDR decoder.
 
 ``rigtools.SlowValue`` is the small JSON message rigtools writes for slow signals (one point
-per message; schema :data:`SLOW_VALUE_SCHEMA`)::
+per message; schema ``data_schemas/slow_value.schema.json``, loaded as
+:data:`SLOW_VALUE_SCHEMA`)::
 
     {"name": "PinionSpeed_rpm", "unit": "rpm", "stamp_ns": 1700000000000000000, "value": 1500.0}
 """
@@ -50,6 +51,8 @@ from typing import Any, Final, Literal, NamedTuple
 import numpy as np
 
 from rigtools.errors import RecordingFormatError
+from rigtools.ingest.mcap_records import SchemaRecord
+from rigtools.schemas import load_schema
 
 __all__ = [
     "ACCEL_BATCH_FIELDS",
@@ -57,6 +60,7 @@ __all__ = [
     "IMU_SCHEMA_NAME",
     "IMU_SCHEMA_TEXT",
     "SLOW_VALUE_SCHEMA",
+    "SLOW_VALUE_SCHEMA_FILE",
     "SLOW_VALUE_SCHEMA_NAME",
     "AccelBatch",
     "AccelBatchColumns",
@@ -94,23 +98,13 @@ ACCEL_BATCH_FIELDS: Final[tuple[tuple[str, int, str, str], ...]] = (
     ("values", 6, "TYPE_FLOAT", "LABEL_REPEATED"),
 )
 
+#: File name (under ``data_schemas/``, see :func:`rigtools.schemas.schema_path`) of the JSON
+#: Schema of ``rigtools.SlowValue``; writers embed its content as the MCAP schema data.
+SLOW_VALUE_SCHEMA_FILE: Final = "slow_value.schema.json"
 #: JSON Schema of ``rigtools.SlowValue`` (message encoding ``json``): one point of a slow
 #: signal. ``stamp_ns`` is the logger time (ns since the UNIX epoch); ``value`` is in ``unit``.
-SLOW_VALUE_SCHEMA: Final[dict[str, Any]] = {
-    "$schema": "https://json-schema.org/draft/2020-12/schema",
-    "title": SLOW_VALUE_SCHEMA_NAME,
-    "description": "One point of a rigtools slow signal (speed, torque, temperature).",
-    "type": "object",
-    "required": ["name", "unit", "stamp_ns", "value"],
-    "additionalProperties": False,
-    "properties": {
-        "name": {"type": "string", "minLength": 1, "description": "Signal name."},
-        "unit": {"type": "string", "description": "Unit of value, e.g. 'rpm'."},
-        "stamp_ns": {"type": "integer", "minimum": 0,
-                     "description": "Logger time (ns since the UNIX epoch)."},
-        "value": {"type": "number", "description": "Value in unit."},
-    },
-}
+#: Loaded from :data:`SLOW_VALUE_SCHEMA_FILE`; shared, do not modify.
+SLOW_VALUE_SCHEMA: Final[dict[str, Any]] = load_schema(SLOW_VALUE_SCHEMA_FILE)
 
 #: ROS 2 message definition of ``sensor_msgs/msg/Imu`` with its dependencies, as rosbag2 and
 #: ``mcap-ros2-support`` write it into ``ros2msg`` schemas.
@@ -161,27 +155,6 @@ class PayloadDecodeError(RecordingFormatError):
 
 class SchemaUnusableError(RecordingFormatError):
     """A schema names a known type but cannot be used (it does not parse, or its fields differ)."""
-
-
-class SchemaRecord(NamedTuple):
-    """An MCAP Schema record, as decoders see it.
-
-    Attributes
-    ----------
-    id : int
-        Schema id (0 is "no schema" in MCAP and never appears here).
-    name : str
-        Schema name, e.g. ``"rigtools.AccelBatch"``.
-    encoding : str
-        Schema encoding: ``"protobuf"``, ``"jsonschema"``, ``"ros2msg"``, ...
-    data : bytes
-        Schema data (a FileDescriptorSet, a JSON Schema, a message definition).
-    """
-
-    id: int
-    name: str
-    encoding: str
-    data: bytes
 
 
 class AccelBatch(NamedTuple):
@@ -699,6 +672,34 @@ def _checked_batch(
     return AccelBatch(channel, unit, float(rate), int(first), int(stamp), values)
 
 
+def _json(data: Any, expected: str) -> Any:
+    try:
+        return json.loads(bytes(data))
+    except (UnicodeDecodeError, ValueError) as exc:
+        raise PayloadDecodeError(None, None, expected, str(exc)) from None
+
+
+def _json_object(data: Any) -> dict[str, Any]:
+    doc = _json(data, "a JSON object")
+    if not isinstance(doc, dict):
+        raise PayloadDecodeError(None, None, "a JSON object", type(doc).__name__)
+    return doc
+
+
+def _uint64(name: str, v: Any) -> int:
+    """``v`` when it is a JSON integer from 0 to 2**64 - 1 (not a bool)."""
+    if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= _UINT64_MAX:
+        raise PayloadDecodeError(None, None, f"{name} as a uint64", repr(v))
+    return v
+
+
+def _number(name: str, v: Any) -> int | float:
+    """``v`` when it is a JSON number (not a bool)."""
+    if isinstance(v, bool) or not isinstance(v, int | float):
+        raise PayloadDecodeError(None, None, f"a number {name}", repr(v))
+    return v
+
+
 def decode_accel_batch_json(data: bytes | memoryview) -> AccelBatch:
     """Decode a JSON ``rigtools.AccelBatch`` (``data_schemas/accel_batch.schema.json``).
 
@@ -710,12 +711,7 @@ def decode_accel_batch_json(data: bytes | memoryview) -> AccelBatch:
     PayloadDecodeError
         Not JSON, not an object, a required field missing or of the wrong type.
     """
-    try:
-        doc = json.loads(bytes(data))
-    except (UnicodeDecodeError, ValueError) as exc:
-        raise PayloadDecodeError(None, None, "a JSON object", str(exc)) from None
-    if not isinstance(doc, dict):
-        raise PayloadDecodeError(None, None, "a JSON object", type(doc).__name__)
+    doc = _json_object(data)
     try:
         channel, unit = doc["channel"], doc["unit"]
         rate, first, stamp = doc["sample_rate_Hz"], doc["first_sample_index"], doc["stamp_ns"]
@@ -724,11 +720,9 @@ def decode_accel_batch_json(data: bytes | memoryview) -> AccelBatch:
         raise PayloadDecodeError(None, None, "the AccelBatch fields", f"no {exc}") from None
     if not (isinstance(channel, str) and isinstance(unit, str)):
         raise PayloadDecodeError(None, None, "string channel and unit", f"{channel!r}, {unit!r}")
-    for name, v in (("first_sample_index", first), ("stamp_ns", stamp)):
-        if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= _UINT64_MAX:
-            raise PayloadDecodeError(None, None, f"{name} as a uint64", repr(v))
-    if isinstance(rate, bool) or not isinstance(rate, int | float):
-        raise PayloadDecodeError(None, None, "a number sample_rate_Hz", repr(rate))
+    first = _uint64("first_sample_index", first)
+    stamp = _uint64("stamp_ns", stamp)
+    rate = _number("sample_rate_Hz", rate)
     if not isinstance(raw, list):
         raise PayloadDecodeError(None, None, "values as an array", type(raw).__name__)
     try:
@@ -741,21 +735,19 @@ def decode_accel_batch_json(data: bytes | memoryview) -> AccelBatch:
 
 
 def decode_slow_value_json(data: bytes | memoryview) -> SlowValue:
-    """Decode a JSON ``rigtools.SlowValue`` (see :data:`SLOW_VALUE_SCHEMA`)."""
-    try:
-        doc = json.loads(bytes(data))
-    except (UnicodeDecodeError, ValueError) as exc:
-        raise PayloadDecodeError(None, None, "a JSON object", str(exc)) from None
-    if not isinstance(doc, dict):
-        raise PayloadDecodeError(None, None, "a JSON object", type(doc).__name__)
+    """Decode a JSON ``rigtools.SlowValue`` (see :data:`SLOW_VALUE_SCHEMA`).
+
+    Raises
+    ------
+    PayloadDecodeError
+        Not JSON, not an object, a field missing or of the wrong type.
+    """
+    doc = _json_object(data)
     name, unit = doc.get("name"), doc.get("unit")
-    stamp, value = doc.get("stamp_ns"), doc.get("value")
     if not (isinstance(name, str) and name and isinstance(unit, str)):
         raise PayloadDecodeError(None, None, "string name and unit", f"{name!r}, {unit!r}")
-    if isinstance(stamp, bool) or not isinstance(stamp, int) or not 0 <= stamp <= _UINT64_MAX:
-        raise PayloadDecodeError(None, None, "stamp_ns as a uint64", repr(stamp))
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise PayloadDecodeError(None, None, "a number value", repr(value))
+    stamp = _uint64("stamp_ns", doc.get("stamp_ns"))
+    value = _number("value", doc.get("value"))
     return SlowValue(name, unit, stamp, float(value))
 
 
@@ -848,10 +840,7 @@ def _generic_ros2(schema: SchemaRecord) -> Callable[[Any], Any]:
 
 
 def _generic_json(data: Any) -> Any:
-    try:
-        return json.loads(bytes(data))
-    except (UnicodeDecodeError, ValueError) as exc:
-        raise PayloadDecodeError(None, None, "JSON", str(exc)) from None
+    return _json(data, "JSON")
 
 
 def _accel_batch_descriptor_matches(data: bytes) -> bool:

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import functools
 import sys
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -18,18 +20,23 @@ from rigtools.schemas import schema_path
 __all__ = ["read", "versions"]
 
 
-def versions() -> dict[str, str]:
-    """Versions of rigtools, Python and the libraries readers use."""
+@functools.cache
+def _versions() -> tuple[tuple[str, str], ...]:
     from importlib.metadata import PackageNotFoundError, version
 
-    out = {"python": sys.version.split()[0]}
+    out = [("python", sys.version.split()[0])]
     for dist in ("rigtools", "numpy", "pyarrow", "mcap", "mcap-ros2-support", "python-can",
                  "cantools", "protobuf"):
         try:
-            out[dist] = version(dist)
+            out.append((dist, version(dist)))
         except PackageNotFoundError:
-            out[dist] = "not installed"
-    return out
+            out.append((dist, "not installed"))
+    return tuple(out)
+
+
+def versions() -> dict[str, str]:
+    """Versions of rigtools, Python and the libraries readers use."""
+    return dict(_versions())
 
 
 def read(
@@ -84,9 +91,27 @@ def read(
     module = reader_module(kind)
     if kind == "parquet":
         return module.read_parquet(p)
+    # The hash runs in a second thread while the reader works (hashlib releases the GIL).
+    hasher = ThreadPoolExecutor(max_workers=1, thread_name_prefix="rigtools-sha256")
+    hashing = hasher.submit(sha256_of, p)
+    try:
+        return _read_with(p, kind, module, dbc, mapping, metadata, strict_dbc, hashing)
+    finally:
+        hasher.shutdown(wait=False)  # after a refusal, let the hash finish on its own
+
+
+def _read_with(
+    p: Path,
+    kind: str,
+    module: Any,
+    dbc: str | Path | None,
+    mapping: str | Path | ChannelMapping | None,
+    metadata: RunMetadata | None,
+    strict_dbc: bool,
+    hashing: Any,
+) -> Recording:
     if isinstance(mapping, str | Path):
         mapping = load_mapping(mapping)
-    digest, size = sha256_of(p)
     report = IngestReport(units="messages" if kind == "mcap" else "frames")
     builder = RecordingBuilder(str(p), report)
     layout_desc: dict[str, Any]
@@ -105,6 +130,7 @@ def read(
             if mapping is not None:
                 layout_desc["mapping"] = mapping.to_dict()
     meta = _merge_metadata(extra, mapping, metadata)
+    digest, size = hashing.result()
     prov = Provenance(str(p), digest, size, kind, versions(), report, layout_desc)
     rec = builder.build(meta, prov)
     if not rec.channels and not rec.slow:

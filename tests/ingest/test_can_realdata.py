@@ -49,21 +49,6 @@ DBC_FILES = _files(DBCS, ".dbc")
 BAD_DBCS = {"bad_message_length.dbc", "issue_63.dbc", "issue_199.dbc", "issue_199_extended.dbc"}
 
 
-def detect(path: Path, monkeypatch: pytest.MonkeyPatch) -> str:
-    """registry.detect_format restricted to the reader modules that exist yet."""
-    order = []
-    for name in reg._SNIFF_ORDER:
-        try:
-            reg.reader_module(name)
-        except ModuleNotFoundError as exc:
-            if exc.name != reg.READERS[name]:
-                raise
-            continue
-        order.append(name)
-    monkeypatch.setattr(reg, "_SNIFF_ORDER", tuple(order))
-    return reg.detect_format(path)
-
-
 def read(path: Path, fmt: str) -> tuple[CanFrameBatch, IngestReport]:
     report = IngestReport()
     with reg.open_source(path) as stream:
@@ -92,8 +77,8 @@ def test_folder_holds_what_source_md_lists() -> None:
 
 @needs_pycan
 @pytest.mark.parametrize("path", LOGS, ids=[p.name for p in LOGS])
-def test_log_reads_like_python_can(path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    fmt = detect(path, monkeypatch)
+def test_log_reads_like_python_can(path: Path) -> None:
+    fmt = reg.detect_format(path)
     assert fmt == ("trc" if path.name.endswith(".trc") else "asc")
     got, report = read(path, fmt)
     data, n_err, n_rtr = python_can(path)
@@ -134,11 +119,11 @@ def test_logged_events_are_reported_not_rejected() -> None:
 
 
 @needs_pycan
-def test_same_frames_across_asc_gz_and_trc(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_same_frames_across_asc_gz_and_trc() -> None:
     asc_path = PYCAN / "test_CanMessage.asc"
     gz_path = PYCAN / "test_CanMessage.asc.gz"
     trc_path = PYCAN / "test_CanMessage.trc"
-    assert [detect(p, monkeypatch) for p in (asc_path, gz_path, trc_path)] == ["asc", "asc", "trc"]
+    assert [reg.detect_format(p) for p in (asc_path, gz_path, trc_path)] == ["asc", "asc", "trc"]
     a, _ = read(asc_path, "asc")
     g, _ = read(gz_path, "asc")
     t, _ = read(trc_path, "trc")

@@ -103,6 +103,34 @@ def test_json_schema_has_the_same_fields_as_the_proto():
     assert set(schema["required"]) == {f[0] for f in ACCEL_BATCH_FIELDS}
 
 
+def test_writer_embeds_the_slow_value_schema_file_and_its_points_conform(tmp_path):
+    """The rigtools.SlowValue schema in a written MCAP is data_schemas/slow_value.schema.json."""
+    from mcap.reader import make_reader
+
+    from rigtools.ingest.mcap_decoders import (
+        SLOW_VALUE_SCHEMA,
+        SLOW_VALUE_SCHEMA_FILE,
+        SLOW_VALUE_SCHEMA_NAME,
+    )
+    from rigtools.schemas import iter_errors
+
+    p = write_accel_mcap(tmp_path / "s.mcap", {}, _slow())
+    with open(p, "rb") as f:
+        messages = list(make_reader(f).iter_messages())
+    schemas = {s.id: s for s, _c, _m in messages}
+    (schema,) = schemas.values()
+    assert (schema.name, schema.encoding) == (SLOW_VALUE_SCHEMA_NAME, "jsonschema")
+    assert SLOW_VALUE_SCHEMA_FILE == "slow_value.schema.json"
+    assert schema.data == schema_path(SLOW_VALUE_SCHEMA_FILE).read_bytes()
+    assert json.loads(schema.data) == SLOW_VALUE_SCHEMA == load_schema(SLOW_VALUE_SCHEMA_FILE)
+    assert SLOW_VALUE_SCHEMA["title"] == SLOW_VALUE_SCHEMA_NAME
+    assert len(messages) == 24
+    for _s, _c, m in messages:
+        assert iter_errors(json.loads(m.data), SLOW_VALUE_SCHEMA_FILE) == []
+    bad = {"name": "x", "unit": "rpm", "stamp_ns": -1, "value": 1.0}
+    assert iter_errors(bad, SLOW_VALUE_SCHEMA_FILE)[0][0] == "$.stamp_ns"
+
+
 def _pb_class():
     from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
 

@@ -1,0 +1,504 @@
+"""The MCAP container walk: records from the first byte on, chunks unpacked, messages out.
+
+The file is read from the start, record by record (opcode u8, length u64, content). Every
+length is checked against what remains before anything is read or allocated
+(:mod:`rigtools.ingest.mcap_source`, :mod:`rigtools.ingest.mcap_records`). Chunks are held
+against their size limits *before* they are decompressed, decompressed with a bounded
+output and checked against their CRC (:mod:`rigtools.ingest.mcap_decompress`). Nothing
+depends on the summary section, so files without a summary or indexes, and files cut short,
+are read as far as they are intact.
+
+:class:`ContainerScanner` hands on messages a block at a time (one block per chunk, with the
+chunk's uncompressed data as a common buffer), which lets payload decoders work on a whole
+chunk at once. :func:`iter_messages` is the same walk one :class:`RawMessage` at a time.
+Every loss is counted in the :class:`~rigtools.ingest.recording.IngestReport`; the reasons
+are listed in :mod:`rigtools.ingest.mcap`.
+
+Messages of a refused chunk are counted by the entries of the message indexes that follow
+it when the file has them; otherwise the chunk counts as one. A message whose channel is not
+defined where it appears (its Channel record was in a refused chunk) is held, and read at the
+end of the file if the summary's repeated Channel records define it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import Any, BinaryIO, Final, NamedTuple, TypeAlias, TypeVar
+
+from rigtools.errors import RecordingFormatError
+from rigtools.ingest.mcap_decompress import (
+    ChunkDecompressor,
+    ChunkRefusedError,
+    check_chunk_crc,
+    check_chunk_size,
+)
+from rigtools.ingest.mcap_records import (
+    MAGIC,
+    MESSAGE_HEADER,
+    MESSAGE_HEADER_BYTES,
+    OP_CHANNEL,
+    OP_CHUNK,
+    OP_DATA_END,
+    OP_FOOTER,
+    OP_HEADER,
+    OP_MESSAGE,
+    OP_MESSAGE_INDEX,
+    OP_METADATA,
+    OP_SCHEMA,
+    OP_STATISTICS,
+    PARSED_OPS,
+    RECORD_HEADER,
+    RECORD_HEADER_BYTES,
+    ChannelRecord,
+    MalformedRecordError,
+    SchemaRecord,
+    message_index_entry_count,
+    parse_channel,
+    parse_chunk_header,
+    parse_metadata,
+    parse_schema,
+    statistics_message_count,
+)
+from rigtools.ingest.mcap_source import ByteSource
+from rigtools.ingest.recording import IngestReport
+
+__all__ = [
+    "DIRECT_BLOCK_MESSAGES",
+    "MAX_DEFERRED_BYTES",
+    "MAX_RECORD_BYTES",
+    "ContainerScanner",
+    "MessageBlock",
+    "RawMessage",
+    "ScannedMessage",
+    "iter_messages",
+]
+
+#: Top-level records longer than this (2 GiB) are skipped and counted ``oversized_record``.
+MAX_RECORD_BYTES: Final = 2 << 30
+#: Messages naming a channel not (yet) defined are held, up to this many payload bytes
+#: (64 MiB), until the summary's repeated Channel records may define it.
+MAX_DEFERRED_BYTES: Final = 64 << 20
+#: Messages found directly in the data section (outside chunks) go on in blocks of this many.
+DIRECT_BLOCK_MESSAGES: Final = 4096
+_MAX_WARNINGS_PER_REASON: Final = 5
+
+#: A message as the scanner hands it on: (channel_id, sequence, log_time (ns), publish_time
+#: (ns), payload, offset of the payload in its block's buffer, or -1 when the block has no
+#: common buffer). A plain tuple: the scanner makes one per message.
+ScannedMessage: TypeAlias = tuple[int, int, int, int, memoryview, int]
+#: One block of messages: (where it was found, common buffer or None, messages).
+MessageBlock: TypeAlias = tuple[str, Any, list[ScannedMessage]]
+
+_Record = TypeVar("_Record", SchemaRecord, ChannelRecord)
+
+
+class RawMessage(NamedTuple):
+    """One MCAP Message record with what its channel and schema say about it.
+
+    Attributes
+    ----------
+    channel_id : int
+    topic : str
+    schema_name, schema_encoding : str
+        Empty for schemaless channels.
+    message_encoding : str
+    log_time, publish_time : int
+        Nanoseconds (the file's clock, usually the UNIX epoch).
+    sequence : int
+    data : bytes
+        The payload.
+    """
+
+    channel_id: int
+    topic: str
+    schema_name: str
+    schema_encoding: str
+    message_encoding: str
+    log_time: int
+    publish_time: int
+    sequence: int
+    data: bytes
+
+
+class ContainerScanner:
+    """Stream an MCAP file's records from the start; yield messages chunk by chunk.
+
+    Parameters
+    ----------
+    stream : binary file object
+        Positioned at the start of the MCAP data.
+    path : str
+        For messages and errors.
+    report : IngestReport
+        Receives the losses and warnings.
+    validate_crcs : bool
+        Check chunk CRCs.
+
+    Attributes
+    ----------
+    schemas : dict of int to SchemaRecord
+        Schemas by id, as far as the walk has come (first definition kept).
+    channels : dict of int to ChannelRecord
+        Channels by id, likewise.
+    metadata : dict of str to dict
+        Key/values of the Metadata records, by record name.
+    statistics_message_count : int or None
+        The message count of the Statistics record, once read.
+    n_message_records : int
+        Message records found (read or counted), to cross-check the Statistics record.
+    """
+
+    def __init__(self, stream: BinaryIO, path: str, report: IngestReport,
+                 validate_crcs: bool = True) -> None:
+        self.path = path
+        self.report = report
+        self.validate_crcs = validate_crcs
+        self.schemas: dict[int, SchemaRecord] = {}
+        self.channels: dict[int, ChannelRecord] = {}
+        self.metadata: dict[str, dict[str, str]] = {}
+        self.statistics_message_count: int | None = None
+        self.n_message_records = 0
+        self._src = ByteSource(stream)
+        self._decompressor = ChunkDecompressor()
+        self._pending: tuple[str, str] | None = None
+        self._pending_count = 0
+        self._warned: dict[str, int] = {}
+        self._deferred: list[tuple[ScannedMessage, str]] = []
+        self._deferred_bytes = 0
+
+    # -- accounting ----------------------------------------------------------------------
+
+    def _warn(self, reason: str, text: str) -> None:
+        n = self._warned.get(reason, 0)
+        self._warned[reason] = n + 1
+        if n < _MAX_WARNINGS_PER_REASON:
+            self.report.warn(text)
+        elif n == _MAX_WARNINGS_PER_REASON:
+            self.report.warn(f"{reason}: further occurrences not listed (see the tallies)")
+
+    def _refuse_chunk(self, reason: str, pos: int, detail: str) -> None:
+        """Refuse a chunk; its messages are counted once the following indexes are seen."""
+        self._flush_pending()
+        self._pending = (reason, f"byte {pos}")
+        self._pending_count = 0
+        self._warn(reason, f"{self.path}: chunk at byte {pos} not used ({reason}): {detail}")
+
+    def _flush_pending(self) -> None:
+        if self._pending is not None:
+            reason, where = self._pending
+            n = self._pending_count
+            self.report.reject(reason, n if n > 0 else 1, where)
+            self.n_message_records += n
+            self._pending = None
+            self._pending_count = 0
+
+    def _malformed(self, kind: str, where: str, exc: MalformedRecordError) -> None:
+        self.report.reject("bad_record", 1, where)
+        self._warn("bad_record", f"{self.path}: malformed {kind} record at {where}: {exc}")
+
+    # -- records -------------------------------------------------------------------------
+
+    def _keep_first(self, table: dict[int, _Record], rec: _Record, kind: str,
+                    where: str) -> None:
+        old = table.setdefault(rec.id, rec)
+        if old != rec:
+            self._warn(f"{kind}_redefined", f"{self.path}: {kind} id {rec.id} redefined at "
+                       f"{where}; the first definition is kept")
+
+    def _schema(self, buf: Any, pos: int, end: int, where: str) -> None:
+        try:
+            rec = parse_schema(buf, pos, end)
+        except MalformedRecordError as exc:
+            self._malformed("Schema", where, exc)
+            return
+        if rec.id != 0:
+            self._keep_first(self.schemas, rec, "schema", where)
+
+    def _channel(self, buf: Any, pos: int, end: int, where: str) -> None:
+        try:
+            rec = parse_channel(buf, pos, end)
+        except MalformedRecordError as exc:
+            self._malformed("Channel", where, exc)
+            return
+        self._keep_first(self.channels, rec, "channel", where)
+
+    def _metadata(self, buf: bytes, where: str) -> None:
+        try:
+            name, meta = parse_metadata(buf)
+        except MalformedRecordError as exc:
+            self._malformed("Metadata", where, exc)
+            return
+        self.metadata.setdefault(name, {}).update(meta)
+
+    # -- chunks --------------------------------------------------------------------------
+
+    def _chunk(self, content: bytes, pos: int) -> tuple[memoryview | None, list[ScannedMessage]]:
+        try:
+            head = parse_chunk_header(content)
+        except MalformedRecordError as exc:
+            self._refuse_chunk("bad_chunk", pos, str(exc))
+            return None, []
+        try:
+            check_chunk_size(head.uncompressed_size, head.records_size)
+            if head.uncompressed_size == 0:
+                return None, []
+            off = head.records_offset
+            data = self._decompressor.decompress(
+                head.compression, memoryview(content)[off : off + head.records_size],
+                head.uncompressed_size)
+            if self.validate_crcs and head.uncompressed_crc != 0:
+                check_chunk_crc(data, head.uncompressed_crc)
+        except ChunkRefusedError as exc:
+            self._refuse_chunk(exc.reason, pos, exc.detail)
+            return None, []
+        buf = memoryview(data)
+        return buf, self._chunk_records(buf, pos)
+
+    def _chunk_records(self, buf: memoryview, cpos: int) -> list[ScannedMessage]:
+        out: list[ScannedMessage] = []
+        append = out.append
+        channels = self.channels
+        unpack_hdr, unpack_msg = RECORD_HEADER.unpack_from, MESSAGE_HEADER.unpack_from
+        hsize, msize = RECORD_HEADER_BYTES, MESSAGE_HEADER_BYTES
+        n = len(buf)
+        pos = 0
+        n_msg = 0
+        while pos < n:
+            if n - pos < hsize:
+                self._bad_in_chunk(cpos, pos, f"{n - pos} stray bytes at the end")
+                break
+            op, length = unpack_hdr(buf, pos)
+            body = pos + hsize
+            if length > n - body:
+                self._bad_in_chunk(cpos, pos, f"record of {length} bytes, {n - body} left")
+                break
+            stop = body + length
+            if op == OP_MESSAGE:
+                n_msg += 1
+                if length < msize:
+                    self.report.reject("bad_record", 1, f"chunk at byte {cpos} +{pos}")
+                else:
+                    cid, seq, lt, pt = unpack_msg(buf, body)
+                    if cid in channels:
+                        append((cid, seq, lt, pt, buf[body + msize : stop], body + msize))
+                    else:
+                        self._defer(cid, seq, lt, pt, buf[body + msize : stop],
+                                    f"chunk at byte {cpos} +{pos}")
+            elif op == OP_SCHEMA:
+                self._schema(buf, body, stop, f"chunk at byte {cpos} +{pos}")
+            elif op == OP_CHANNEL:
+                self._channel(buf, body, stop, f"chunk at byte {cpos} +{pos}")
+            pos = stop
+        self.n_message_records += n_msg
+        return out
+
+    def _bad_in_chunk(self, cpos: int, pos: int, detail: str) -> None:
+        where = f"chunk at byte {cpos} +{pos}"
+        self.report.reject("bad_chunk_record", 1, where)
+        self._warn("bad_chunk_record", f"{self.path}: {where}: {detail}; the rest of the chunk "
+                   "is not used")
+
+    # -- messages whose channel is not defined yet ---------------------------------------
+
+    def _defer(self, cid: int, seq: int, lt: int, pt: int, data: Any, where: str) -> None:
+        """Hold a message whose channel is not defined yet.
+
+        Its Channel record may have been in a refused chunk; indexed files repeat every
+        Channel record in the summary.
+        """
+        if self._deferred_bytes + len(data) > MAX_DEFERRED_BYTES:
+            self._unknown_channel(cid, where)
+            return
+        self._deferred_bytes += len(data)
+        self._deferred.append(((cid, seq, lt, pt, memoryview(bytes(data)), -1), where))
+
+    def _release_deferred(self) -> list[ScannedMessage]:
+        out = []
+        for msg, where in self._deferred:
+            if msg[0] in self.channels:
+                out.append(msg)
+            else:
+                self._unknown_channel(msg[0], where)
+        if out:
+            self.report.warn(f"{self.path}: {len(out)} message(s) came before the Channel "
+                             "record defining their channel (found in the summary); they were "
+                             "read last")
+        self._deferred = []
+        self._deferred_bytes = 0
+        return out
+
+    def _unknown_channel(self, cid: int, where: str) -> None:
+        self.report.reject("unknown_channel", 1, where)
+        self._warn("unknown_channel", f"{self.path}: message at {where} names channel id {cid}, "
+                   "which no Channel record in the file defines")
+
+    # -- the stream ----------------------------------------------------------------------
+
+    def blocks(self) -> Iterator[MessageBlock]:
+        """Yield ``(position, buffer, messages)`` in file order.
+
+        One block per chunk (with the chunk's uncompressed data as ``buffer``), and blocks
+        of the messages found directly in the data section (``buffer`` None).
+
+        Raises
+        ------
+        RecordingFormatError
+            The file is empty or does not start with the MCAP magic.
+        """
+        src = self._src
+        head = src.read(len(MAGIC))
+        if head != MAGIC:
+            raise RecordingFormatError(
+                self.path, 0, f"the MCAP magic {MAGIC!r}",
+                "an empty file" if not head else repr(head),
+            )
+        direct: list[ScannedMessage] = []
+        direct_pos = ""
+        data_end = False
+        first = True
+        while True:
+            pos = src.pos
+            hdr = src.read(RECORD_HEADER_BYTES)
+            if len(hdr) < RECORD_HEADER_BYTES:
+                self._flush_pending()
+                want = "a Footer" if data_end else "a DataEnd record and Footer"
+                self._ended(pos, data_end, "a record header" if hdr else want,
+                            f"{len(hdr)} bytes" if hdr else "the end of the file")
+                break
+            op, length = RECORD_HEADER.unpack(hdr)
+            if first and op != OP_HEADER:
+                self.report.warn(f"{self.path}: the first record is opcode 0x{op:02x}, not a "
+                                 "Header")
+            first = False
+            if op != OP_MESSAGE_INDEX:
+                self._flush_pending()
+            rem = src.remaining()
+            if rem is not None and length > rem:
+                self._ended(pos, data_end, f"a record of {length} bytes (opcode 0x{op:02x})",
+                            f"{rem} bytes left in the file")
+                break
+            if op not in PARSED_OPS and not (op == OP_MESSAGE_INDEX and self._pending):
+                if src.skip(length) < length:
+                    self._ended(pos, data_end, f"a record of {length} bytes (opcode "
+                                f"0x{op:02x})", "the end of the file")
+                    break
+                continue
+            if length > MAX_RECORD_BYTES:
+                self.report.reject("oversized_record", 1, f"byte {pos}")
+                self._warn("oversized_record", f"{self.path}: record at byte {pos} (opcode "
+                           f"0x{op:02x}) of {length} bytes exceeds {MAX_RECORD_BYTES}; skipped")
+                if src.skip(length) < length:
+                    self._ended(pos, data_end, f"a record of {length} bytes",
+                                "the end of the file")
+                    break
+                continue
+            content = src.read(length)
+            if len(content) < length:
+                self._ended(pos, data_end, f"a record of {length} bytes (opcode 0x{op:02x})",
+                            f"{len(content)} bytes")
+                break
+            where = f"byte {pos}"
+            if op == OP_MESSAGE:
+                self.n_message_records += 1
+                if length < MESSAGE_HEADER_BYTES:
+                    self.report.reject("bad_record", 1, where)
+                    continue
+                cid, seq, lt, pt = MESSAGE_HEADER.unpack_from(content, 0)
+                payload = memoryview(content)[MESSAGE_HEADER_BYTES:]
+                if cid not in self.channels:
+                    self._defer(cid, seq, lt, pt, payload, where)
+                    continue
+                if not direct:
+                    direct_pos = where
+                direct.append((cid, seq, lt, pt, payload, -1))
+                if len(direct) >= DIRECT_BLOCK_MESSAGES:
+                    yield direct_pos, None, direct
+                    direct = []
+                continue
+            if direct:
+                yield direct_pos, None, direct
+                direct = []
+            if op == OP_CHUNK:
+                buf, msgs = self._chunk(content, pos)
+                del content
+                if msgs:
+                    yield where, buf, msgs
+                del buf, msgs
+            elif op == OP_SCHEMA:
+                self._schema(content, 0, length, where)
+            elif op == OP_CHANNEL:
+                self._channel(content, 0, length, where)
+            elif op == OP_METADATA:
+                self._metadata(content, where)
+            elif op == OP_MESSAGE_INDEX:
+                if self._pending is not None:
+                    self._pending_count += message_index_entry_count(content)
+            elif op == OP_STATISTICS:
+                count = statistics_message_count(content)
+                if count is not None:
+                    self.statistics_message_count = count
+            elif op == OP_DATA_END:
+                data_end = True
+            elif op == OP_FOOTER:
+                if src.read(len(MAGIC)) != MAGIC:
+                    self.report.warn(f"{self.path}: no closing magic after the Footer at {where}")
+                break
+        if direct:
+            yield direct_pos, None, direct
+        self._flush_pending()
+        late = self._release_deferred()
+        if late:
+            yield "the end of the file (deferred messages)", None, late
+        self._cross_check()
+
+    def _ended(self, pos: int, data_end: bool, expected: str, found: str) -> None:
+        """The file ends early: a loss in the data section, a warning in the summary."""
+        if data_end:
+            self.report.warn(f"{self.path}: the file ends at byte {pos} inside its summary "
+                             f"section (expected {expected}, found {found}); no data lost")
+            return
+        self.report.reject("truncated_record", 1, f"byte {pos}")
+        self.report.warn(f"{self.path}: the file is cut at byte {pos}: expected {expected}, "
+                         f"found {found}; everything before it was read")
+
+    def _cross_check(self) -> None:
+        n = self.statistics_message_count
+        if n is not None and n != self.n_message_records and not self.report.rejected.get(
+                "truncated_record"):
+            self.report.warn(f"{self.path}: the Statistics record counts {n} messages, "
+                             f"{self.n_message_records} Message records were found")
+
+
+def iter_messages(stream: BinaryIO, path: str, report: IngestReport,
+                  *, validate_crcs: bool = True) -> Iterator[RawMessage]:
+    """Iterate over the Message records of an MCAP stream, in file order.
+
+    Parameters
+    ----------
+    stream : binary file object
+        Positioned at the start of the MCAP data (a file, ``gzip`` stream or ``BytesIO``).
+    path : str
+        For messages and errors.
+    report : IngestReport
+        Receives the losses (see :mod:`rigtools.ingest.mcap` for the reasons).
+    validate_crcs : bool
+        Check chunk CRCs (default). A mismatching chunk's messages are counted, not yielded.
+
+    Yields
+    ------
+    RawMessage
+        Every intact message whose channel is defined, with its payload bytes, in file
+        order (but for messages whose Channel record only the summary holds: those last).
+
+    Raises
+    ------
+    RecordingFormatError
+        The stream is empty or does not start with the MCAP magic.
+    """
+    sc = ContainerScanner(stream, path, report, validate_crcs)
+    for _where, _buf, msgs in sc.blocks():
+        for cid, seq, lt, pt, data, _start in msgs:
+            ch = sc.channels[cid]
+            sch = sc.schemas.get(ch.schema_id)
+            yield RawMessage(cid, ch.topic, sch.name if sch else "", sch.encoding if sch else "",
+                             ch.message_encoding, lt, pt, seq, bytes(data))
