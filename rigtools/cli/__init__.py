@@ -14,6 +14,8 @@ Exit codes:
 from __future__ import annotations
 
 import argparse
+import ctypes
+import ctypes.util
 import sys
 from collections.abc import Sequence
 
@@ -44,8 +46,35 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+_M_MMAP_THRESHOLD = -3  # glibc mallopt parameter
+_MMAP_THRESHOLD_BYTES = 256 * 1024
+
+
+def _tune_allocator() -> None:
+    """Hand large freed buffers back to the system at once (glibc only; the CLI only).
+
+    Ingest streams batches of a few MB through NumPy. glibc raises its mmap threshold
+    dynamically each time such a buffer is freed, after which later batches are served from
+    the heap and freed space is not returned, so the peak resident set grows well past what
+    Python holds (a 30-minute BLF: 2.3x the decoded arrays instead of 1.5x). A fixed threshold
+    keeps buffers above it in their own mappings. This is a process-wide setting, so the
+    library never makes it; the command line, which owns its process, does.
+    """
+    if not sys.platform.startswith("linux"):
+        return
+    name = ctypes.util.find_library("c")
+    if not name:
+        return
+    try:
+        libc = ctypes.CDLL(name)
+        libc.mallopt(_M_MMAP_THRESHOLD, _MMAP_THRESHOLD_BYTES)
+    except (OSError, AttributeError):  # not glibc: nothing to tune
+        return
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``rigtools`` console script."""
+    _tune_allocator()
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

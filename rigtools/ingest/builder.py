@@ -139,7 +139,9 @@ class RecordingBuilder:
             raw = vals.reshape(-1, 1)
         if starts.shape[0] != raw.shape[0]:
             raise ValueError(f"`index` has {starts.shape[0]} rows, `values` {raw.shape[0]}")
-        parts.blocks.append(_Block(starts, raw, tuple(conversion)))
+        conv = tuple(conversion)
+        for b_starts, b_raw in _contiguous_runs(starts, raw):
+            parts.blocks.append(_Block(b_starts, b_raw, conv))
         parts.n_samples += raw.size
         if stamps_s is not None and stamp_index is not None and np.size(stamps_s):
             parts.stamp_index.append(np.asarray(stamp_index, np.int64))
@@ -337,3 +339,27 @@ def _convert_into(raw: np.ndarray, conversion: tuple[tuple[float, float], ...],
         # Same operations as rigtools.ingest.dbc.decode_signal, so results match bit for bit.
         np.multiply(out, scale, out=out)
         np.add(out, offset, out=out)
+
+
+#: A block whose rows break contiguity more often than this stays a table of rows.
+MAX_RUNS_PER_BLOCK = 64
+
+
+def _contiguous_runs(
+    starts: np.ndarray, raw: np.ndarray
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Merge consecutive rows that continue each other into single rows.
+
+    CAN frames of one channel usually follow each other sample for sample; one row per run
+    keeps the builder's row table (int64 per row) from costing as much as the samples.
+    """
+    m, k = raw.shape
+    if m == 1:
+        return [(starts, raw)]
+    breaks = np.flatnonzero(np.diff(starts) != k) + 1
+    if breaks.size >= MAX_RUNS_PER_BLOCK:
+        return [(starts, raw)]
+    bounds = [0, *breaks.tolist(), m]
+    raw = np.ascontiguousarray(raw)
+    return [(starts[a : a + 1], raw[a:b].reshape(1, -1)) for a, b in zip(bounds[:-1], bounds[1:],
+                                                                          strict=True)]

@@ -35,7 +35,9 @@ __all__ = ["assemble_can"]
 class _UniformAcc:
     spec: CanUniform
     counters: list[np.ndarray] = field(default_factory=list)
-    stamps: list[np.ndarray] = field(default_factory=list)
+    # Logger stamps per batch as (float64 base, float32 offsets): 4 bytes a frame, and
+    # sub-microsecond precision over a batch's few seconds.
+    stamps: list[tuple[float, np.ndarray]] = field(default_factory=list)
     raws: list[np.ndarray] = field(default_factory=list)
     conversion: tuple[tuple[float, float], ...] = ()
     first_position: str = ""
@@ -126,7 +128,8 @@ def _decode_uniform(
         acc.conversion = conv
         acc.first_position = where
     acc.raws.append(raw)
-    acc.stamps.append(stamps)
+    base = float(stamps[0])
+    acc.stamps.append((base, (stamps - base).astype(np.float32)))
     if u.counter is not None:
         acc.counters.append(signal_raw(data, u.counter)[0])
 
@@ -138,7 +141,11 @@ def _finish_uniform(acc: _UniformAcc, builder: RecordingBuilder, report: IngestR
     k = len(u.samples)
     fs = u.spec.sample_rate_Hz
     frame_rate = fs / k
-    stamps = np.concatenate(acc.stamps)
+    stamps = np.empty(sum(r.size for _, r in acc.stamps))
+    row = 0
+    for base, rel in acc.stamps:
+        np.add(rel, base, out=stamps[row : row + rel.size], dtype=np.float64)
+        row += rel.size
     acc.stamps.clear()
     name = u.spec.channel
     if u.counter is not None:
