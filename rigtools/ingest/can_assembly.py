@@ -9,7 +9,6 @@ counted in the :class:`~rigtools.ingest.recording.IngestReport` under a reason:
 ``message_not_in_layout``    in the DBC, but no channel or slow signal of the layout uses it
 ``dlc_shorter_than_dbc``     payload shorter than the DBC message length
 ``duplicate_frame``          same sample counter as an earlier frame of the channel
-``counter_backwards``        sample counter below one already seen (late or reordered frame)
 
 (error and remote frames are counted by the readers, which see them first).
 """
@@ -156,8 +155,12 @@ def _finish_uniform(acc: _UniformAcc, builder: RecordingBuilder, report: IngestR
         del counters
         if un.n_duplicate:
             report.reject("duplicate_frame", un.n_duplicate, f"channel {name!r}")
-        if un.n_backwards:
-            report.reject("counter_backwards", un.n_backwards, f"channel {name!r}")
+        if un.n_reordered:
+            report.warn(f"channel {name!r}: {un.n_reordered} frame(s) arrived out of order; "
+                        "placed by their sample counter")
+        if un.clock_jumps:
+            report.warn(f"channel {name!r}: the logger clock jumped {un.clock_jumps} time(s) "
+                        "while the sample counter ran on; the counter was kept")
         if un.restarts.size:
             report.warn(
                 f"channel {name!r}: sample counter restarted {un.restarts.size} time(s) "

@@ -26,21 +26,29 @@ class UnwrappedCounter:
     ticks : numpy.ndarray
         Absolute tick (counter value with wraps added), int64, one per input element.
     keep : numpy.ndarray
-        Boolean mask: ``False`` for duplicates and for steps that went backwards.
+        Boolean mask: ``False`` for duplicates (a tick already received earlier).
     n_duplicate : int
-        Elements whose tick equals that of an earlier kept element.
-    n_backwards : int
-        Elements whose tick is below the last kept one (late or reordered frames).
+        Elements whose tick equals that of an earlier element.
+    n_reordered : int
+        Elements that arrived after a later tick (late or reordered frames); they are kept
+        and placed by their counter.
     restarts : numpy.ndarray
-        Positions (into the input) where the counter disagreed with the clock by more than the
-        tolerance and the tick was resynchronised from the timestamps.
+        Positions (into the input) where the counter restarted and was resynchronised.
+    clock_jumps : int
+        Steps where the logger clock jumped by more than half a wrap while the counter went on
+        at its usual step: the clock was ignored there.
     """
 
     ticks: np.ndarray
     keep: np.ndarray
     n_duplicate: int
-    n_backwards: int
+    n_reordered: int
     restarts: np.ndarray
+    clock_jumps: int = 0
+
+
+#: Consecutive usual steps that mark a backwards counter step as a restart, not a late frame.
+RESTART_RUN = 8
 
 
 def unwrap_counter(
@@ -58,8 +66,8 @@ def unwrap_counter(
     modulus : int
         Counter modulus, ``2**bits``.
     stamps_s : numpy.ndarray, optional
-        Logger timestamps of the same elements (s). With ``tick_rate_Hz``, used to choose the
-        number of wraps between elements and to detect restarts.
+        Logger timestamps of the same elements (s), used only to count whole wraps across
+        long gaps (see Notes). NaN, Inf and outlying stamps are tolerated.
     tick_rate_Hz : float, optional
         Nominal counter rate (ticks per second).
 
@@ -69,12 +77,16 @@ def unwrap_counter(
 
     Notes
     -----
-    Without timestamps each step ``d = (c[i] - c[i-1]) mod M`` is taken as ``d`` ticks forward
-    when ``0 < d <= M/2``, a duplicate when ``d == 0``, and a step backwards otherwise.
-    With timestamps, the step is ``d + k M`` with ``k`` the whole number of wraps that brings
-    it closest to the elapsed time times the tick rate; a step that still disagrees with the
-    clock by more than a quarter wrap (and by more than 10 % of the elapsed ticks) is a
-    counter restart, and the tick is resynchronised from the clock.
+    The counter is the authority. Each step ``d = (c[i] - c[i-1]) mod M`` is taken as ``d``
+    ticks forward when ``0 < d <= M/2``, a duplicate when the tick was already received, and
+    a step backwards (a late frame, placed by its counter) otherwise. A step backwards
+    followed by a steady run of usual steps is a counter restart, resynchronised to continue.
+
+    The logger clock is consulted only where frames were lost (``d`` differs from the usual
+    step) and it says more than half a wrap went by: the step is then ``d + k M`` with ``k``
+    the whole number of wraps closest to the elapsed time. A clock that says so while the
+    counter continues with its usual step has jumped (a clock adjustment), and is ignored; a
+    stamp that jumps and comes back (an outlier) is ignored too.
     """
     c = np.asarray(counter).astype(np.int64, copy=False)
     n = c.shape[0]
@@ -83,55 +95,51 @@ def unwrap_counter(
         return UnwrappedCounter(empty, np.zeros(0, bool), 0, 0, empty)
     m = int(modulus)
     d = np.diff(c) % m
-    use_clock = stamps_s is not None and tick_rate_Hz is not None and n > 1
-    restarts = np.zeros(0, np.int64)
-    if use_clock:
-        assert stamps_s is not None and tick_rate_Hz is not None
-        expected = np.diff(np.asarray(stamps_s, np.float64)) * float(tick_rate_Hz)
-        k = np.round((expected - d) / m)
-        k = np.maximum(k, 0)
-        step = d + k * m
-        # Backwards steps look like almost a full wrap forward in no time.
-        backwards = (d > m // 2) & (expected < d - m / 4)
-        step = np.where(backwards, d - m, step)
-        tol = np.maximum(m / 4, 0.1 * np.abs(expected))
-        bad = ~backwards & (np.abs(step - expected) > tol) & (expected > m / 2)
-        restarts = np.flatnonzero(bad) + 1
-        step = np.where(bad, np.round(expected), step).astype(np.int64)
-    else:
-        step = np.where(d > m // 2, d - m, d).astype(np.int64)
-    # A step backwards followed by a steady run is a counter restart (sensor or logger
-    # reset), not a late frame: resynchronise there instead of discarding all that follows.
-    back = np.flatnonzero(step < 0)
-    if back.size:
-        typical = int(np.median(d)) if d.size else 1
-        run = 8
-        new_restarts = []
-        for p in back:
-            following = d[p + 1 : p + 1 + run]
-            if following.size and np.all(following == typical):
-                if use_clock:
-                    assert stamps_s is not None and tick_rate_Hz is not None
-                    dt = float(stamps_s[p + 1] - stamps_s[p]) * float(tick_rate_Hz)
-                    step[p] = max(1, round(dt))
-                else:
-                    step[p] = max(1, typical)
-                new_restarts.append(p + 1)
-        if new_restarts:
-            restarts = np.union1d(restarts, np.asarray(new_restarts, np.int64))
+    typical = max(1, int(np.median(d))) if d.size else 1
+    step = np.where(d > m // 2, d - m, d)
+    clock_jumps = 0
+    expected: np.ndarray | None = None
+    if stamps_s is not None and tick_rate_Hz is not None and n > 1:
+        with np.errstate(invalid="ignore", over="ignore"):
+            expected = np.diff(np.asarray(stamps_s, np.float64)) * float(tick_rate_Hz)
+        usable = np.isfinite(expected) & (expected >= 0)
+        # The clock must stay at its new level: a jump undone by the next step is an outlier.
+        stays = np.ones(d.size, bool)
+        stays[:-1] = ~(np.isfinite(expected[1:]) & (expected[1:] < -m / 4))
+        long_claim = usable & stays & (expected > m / 2)
+        lost = d != typical
+        long_gap = long_claim & lost
+        clock_jumps = int(np.count_nonzero(long_claim & ~lost))
+        if long_gap.any():
+            k = np.zeros(d.size)
+            k[long_gap] = np.round((expected[long_gap] - d[long_gap]) / m)
+            k = np.clip(k, 0, (1 << 40) // m)
+            step = np.where(long_gap, d + k.astype(np.int64) * m, step)
+    step = step.astype(np.int64, copy=False)
+    restarts = []
+    for p in np.flatnonzero(step < 0):
+        following = d[p + 1 : p + 1 + RESTART_RUN]
+        if following.size == RESTART_RUN and np.all(following == typical):
+            step[p] = typical
+            if expected is not None and np.isfinite(expected[p]) and expected[p] > 0:
+                step[p] = max(1, min(int(round(expected[p])), 1 << 40))
+            restarts.append(p + 1)
     ticks = np.empty(n, np.int64)
     ticks[0] = c[0]
     np.cumsum(step, out=ticks[1:])
     ticks[1:] += c[0]
-    # Keep an element only when it advances past every earlier kept element.
-    running_max = np.maximum.accumulate(ticks)
     keep = np.ones(n, bool)
-    keep[1:] = ticks[1:] > running_max[:-1]
-    dup = np.zeros(n, bool)
-    dup[1:] = ticks[1:] == running_max[:-1]
-    n_dup = int(dup.sum())
-    n_back = int((~keep).sum()) - n_dup
-    return UnwrappedCounter(ticks, keep, n_dup, n_back, restarts)
+    if np.all(step > 0):
+        return UnwrappedCounter(ticks, keep, 0, 0, np.asarray(restarts, np.int64), clock_jumps)
+    running_max = np.maximum.accumulate(ticks)
+    order = np.argsort(ticks, kind="stable")  # equal ticks stay in arrival order
+    same = ticks[order[1:]] == ticks[order[:-1]]
+    keep[order[1:][same]] = False  # the later arrival of a tick is the duplicate
+    late = np.zeros(n, bool)
+    late[1:] = ticks[1:] < running_max[:-1]
+    return UnwrappedCounter(ticks, keep, int(np.count_nonzero(same)),
+                            int(np.count_nonzero(late & keep)),
+                            np.asarray(restarts, np.int64), clock_jumps)
 
 
 def indices_from_stamps(stamps_s: np.ndarray, sample_rate_Hz: float) -> np.ndarray:
@@ -171,6 +179,9 @@ def timebase_check(
     """
     idx = np.asarray(index, np.float64)
     t = np.asarray(stamps_s, np.float64)
+    finite = np.isfinite(t)
+    if not finite.all():
+        idx, t = idx[finite], t[finite]
     if t.size == 0:
         return 0.0, {}
     offset = t - idx / float(sample_rate_Hz)

@@ -12,15 +12,24 @@ def test_plain_wrap_of_a_16_bit_counter():
     ticks = np.arange(60_000, 140_000)
     un = unwrap_counter(ticks % 65536, 65536)
     assert np.array_equal(un.ticks - un.ticks[0], ticks - ticks[0])
-    assert un.keep.all() and un.n_duplicate == 0 and un.n_backwards == 0
+    assert un.keep.all() and un.n_duplicate == 0 and un.n_reordered == 0
 
 
 def test_gap_duplicate_and_late_frame():
     c = np.array([10, 11, 11, 12, 15, 9, 16, 17])
     un = unwrap_counter(c, 256)
-    assert un.ticks[un.keep].tolist() == [10, 11, 12, 15, 16, 17]
+    # The late frame is kept and placed by its counter; only the repeated 11 is dropped.
+    assert un.ticks[un.keep].tolist() == [10, 11, 12, 15, 9, 16, 17]
     assert un.n_duplicate == 1
-    assert un.n_backwards == 1
+    assert un.n_reordered == 1
+
+
+def test_swapped_neighbours_are_all_kept():
+    ticks = np.arange(3000)
+    swapped = ticks.reshape(-1, 2)[:, ::-1].ravel()  # 1, 0, 3, 2, ...
+    un = unwrap_counter(swapped % 65536, 65536, swapped / 8533.0, 8533.0)
+    assert un.keep.all() and sorted(un.ticks.tolist()) == ticks.tolist()
+    assert un.n_duplicate == 0 and un.n_reordered == 1500
 
 
 def test_gap_longer_than_one_wrap_needs_the_clock():
@@ -40,6 +49,7 @@ def test_restart_resynchronises_instead_of_dropping_everything_after():
     un = unwrap_counter(c % 65536, 65536, t, 100.0)
     assert un.keep.sum() == 200
     assert un.restarts.tolist() == [100]
+    assert un.ticks[100] == un.ticks[99] + 1
     assert np.all(np.diff(un.ticks) > 0)
 
 
@@ -71,3 +81,32 @@ def test_timebase_check_measures_latency_and_drift():
     assert t0 == pytest.approx(100.002 + 5 * 50e-6, abs=1e-4)
     assert stats["drift_ppm"] == pytest.approx(50.0, rel=1e-6)
     assert stats["n_stamps_backwards"] == 0
+
+
+def test_clock_step_with_an_intact_counter_keeps_the_counter():
+    # A logger clock adjusted by +3600 s while the sensor counter runs on at its usual step.
+    n = 20_000
+    t = np.arange(n) / 8533.0
+    t[n // 2 :] += 3600.0
+    un = unwrap_counter(np.arange(n) % 65536, 65536, t, 8533.0)
+    assert np.array_equal(un.ticks, np.arange(n))
+    assert un.clock_jumps == 1
+
+
+@pytest.mark.parametrize("bad", [1e6, np.nan, np.inf, -np.inf, 1.7e16])
+def test_one_outlying_or_non_finite_stamp_is_ignored(bad):
+    n = 5000
+    t = 1.7e9 + np.arange(n) / 8533.0
+    t[2500] = bad
+    un = unwrap_counter(np.arange(n) % 65536, 65536, t, 8533.0)
+    assert np.array_equal(un.ticks, np.arange(n))
+    t0, stats = timebase_check(np.arange(n), t, 8533.0)
+    assert t0 == pytest.approx(1.7e9, abs=1e-6)
+
+
+def test_long_gap_with_lost_frames_uses_the_clock_to_count_wraps():
+    # 20 s of silence (170,660 ticks = 2 wraps + 39,588) with a 16-bit counter.
+    rate = 8533.0
+    ticks = np.r_[np.arange(1000), 1000 + 170_660 + np.arange(1000)]
+    un = unwrap_counter(ticks % 65536, 65536, ticks / rate, rate)
+    assert np.array_equal(un.ticks, ticks)
