@@ -79,6 +79,7 @@ class RecordingBuilder:
         self.report = report
         self._channels: dict[str, _ChannelParts] = {}
         self._slow: dict[str, _SlowParts] = {}
+        self._restarts: dict[str, set[int]] = {}
 
     def add_samples(
         self,
@@ -154,6 +155,10 @@ class RecordingBuilder:
             parts.stamp_index.append(np.asarray(stamp_index, np.int64))
             parts.stamps.append(np.asarray(stamps_s, np.float64))
 
+    def mark_restart(self, channel: str, index: int) -> None:
+        """Note that the source's counter restarted at sample ``index`` (gap kind "restart")."""
+        self._restarts.setdefault(channel, set()).add(int(index))
+
     def set_start_time(self, channel: str, start_time_s: float) -> None:
         """Fix the time of sample index 0 (when the source states it exactly)."""
         if channel in self._channels:
@@ -215,13 +220,38 @@ class RecordingBuilder:
         span = last_end - first
         n_kept = int(widths.sum()) - n_dup
         if span > MAX_SPAN_FACTOR * n_kept + MAX_SPAN_ALLOWANCE:
-            raise RecordingFormatError(
-                self.path,
-                f"channel {name!r}",
-                f"sample indices spanning about the {n_kept} samples received",
-                f"indices from {first} to {last_end - 1} (span {span})",
-                "the sample counter is corrupt or restarted beyond repair",
+            # A corrupt counter must not allocate gigabytes, nor cost the intact data: keep the
+            # run of rows holding most samples, count the rest.
+            e_run = np.maximum.accumulate(ends)
+            cut = np.flatnonzero(s_sorted[1:] - e_run[:-1] > MAX_SPAN_ALLOWANCE) + 1
+            bounds = np.r_[0, cut, s_sorted.size]
+            weight = np.add.reduceat(w_sorted, bounds[:-1])
+            best = int(np.argmax(weight))
+            if cut.size == 0 or weight[best] == 0:
+                raise RecordingFormatError(
+                    self.path,
+                    f"channel {name!r}",
+                    f"sample indices spanning about the {n_kept} samples received",
+                    f"indices from {first} to {last_end - 1} (span {span})",
+                    "the sample counter is corrupt beyond repair",
+                )
+            keep_sorted = np.zeros(s_sorted.size, bool)
+            keep_sorted[bounds[best] : bounds[best + 1]] = True
+            keep_row = keep_sorted if order is None else np.empty_like(keep_sorted)
+            if order is not None:
+                keep_row[order] = keep_sorted
+            dropped = int(widths.sum() - weight[best])
+            self.report.reject("implausible_sample_index", dropped, f"channel {name!r}")
+            self.report.warn(
+                f"channel {name!r}: {dropped} sample(s) carried indices far from the "
+                f"{int(weight[best])} others (a corrupt or restarted counter); not used"
             )
+            parts.blocks = [
+                _Block(b.starts[sel], b.raw[sel], b.conversion)
+                for bi, b in enumerate(blocks)
+                if (sel := keep_row[row0[bi] : row0[bi + 1]]).any()
+            ]
+            return self._build_channel(name, parts)
         if n_dup:
             self.report.reject("duplicate_sample", n_dup, f"channel {name!r}")
         if order is None:
@@ -268,7 +298,8 @@ class RecordingBuilder:
                     valid[lo : int(bs[r]) + k] = True
         # Integer samples with finite scales cannot be NaN or Inf: skip the pass over them.
         may_be_nonfinite = any(
-            b.raw.dtype.kind not in "iub" or any(abs(sc) > 1e200 for sc, _ in b.conversion)
+            b.raw.dtype.kind not in "iub"
+            or any(not (abs(sc) < 1e200 and abs(off) < 1e300) for sc, off in b.conversion)
             for b in blocks
         )
         parts.blocks = []
@@ -300,8 +331,10 @@ class RecordingBuilder:
             t0 = 0.0
         for p in gap_at:
             start = int(e_sorted[p])
+            end = start + int(hole[p])
+            kind = "restart" if end in self._restarts.get(name, ()) else "gap"
             self.report.gaps.append(
-                Gap(name, start, int(hole[p]), t0 + start / parts.sample_rate_Hz)
+                Gap(name, start, int(hole[p]), t0 + start / parts.sample_rate_Hz, kind)
             )
         return Channel(name, parts.unit, parts.sample_rate_Hz, float(t0), first, values, valid)
 
@@ -310,6 +343,13 @@ class RecordingBuilder:
             return None
         t = _join(parts.time)
         v = _join(parts.values)
+        bad_t = ~np.isfinite(t)
+        if bad_t.any():
+            self.report.reject("non_finite_timestamp", int(bad_t.sum()), f"slow signal {name!r}")
+            t, v = t[~bad_t], v[~bad_t]
+        n_bad_v = int(np.count_nonzero(~np.isfinite(v)))
+        if n_bad_v:  # kept as received: a NaN reading is data about the sensor
+            self.report.warn(f"slow signal {name!r}: {n_bad_v} non-finite value(s), kept")
         back = int(np.count_nonzero(np.diff(t) < 0))
         if back:
             order = np.argsort(t, kind="stable")

@@ -168,6 +168,8 @@ def _finish_uniform(acc: _UniformAcc, builder: RecordingBuilder, report: IngestR
                 "resynchronised from the logger clock"
             )
         ticks, keep = un.ticks, un.keep
+        for r in un.restarts:
+            builder.mark_restart(name, int(ticks[r]) * k)
     else:
         ticks = np.round((stamps - stamps.min()) * frame_rate).astype(np.int64)
         keep = np.ones(ticks.size, bool)

@@ -2,18 +2,22 @@
 
 Layout (contract: ``data_schemas/recording.schema.json``):
 
-* uniform channel ``NAME``: column ``ch/NAME`` (float64) and ``ch/NAME/valid`` (bool);
-* slow signal ``NAME``: columns ``slow/NAME/time_s`` and ``slow/NAME/value`` (float64);
+* the i-th uniform channel: columns ``ch/<i>/values`` (float64) and ``ch/<i>/valid`` (bool);
+* the i-th slow signal: columns ``slow/<i>/time_s`` and ``slow/<i>/value`` (float64);
+  (columns are named by position, so no channel name can collide with another's column);
 * columns padded with nulls to the longest; the lengths come from the metadata;
 * the Parquet key-value metadata ``rigtools.recording`` holds a JSON document with channel
   rates, start times and first indices, run metadata and provenance (with the ingest report).
 
 Values are stored as float64 bit patterns, so NaN and Inf survive and
-``read_parquet(write_parquet(rec))`` equals ``rec`` bit for bit.
+``read_parquet(write_parquet(rec))`` equals ``rec`` bit for bit. Every data page carries a
+CRC32 that is verified on reading, and the metadata document its SHA-256, so a flipped bit is
+an error, not a silently wrong value.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 from pathlib import Path
@@ -32,6 +36,7 @@ __all__ = ["KIND", "NAME", "read_parquet", "sniff", "write_parquet"]
 NAME = "parquet"
 KIND = "recording"
 META_KEY = b"rigtools.recording"
+DIGEST_KEY = b"rigtools.recording.sha256"
 
 
 def sniff(head: bytes) -> bool:
@@ -105,16 +110,19 @@ def write_parquet(rec: Recording, path: str | Path) -> Path:
                  + [0])
     names: list[str] = []
     cols: list[pa.ChunkedArray] = []
-    for c in rec.channels.values():
-        names += [f"ch/{c.name}", f"ch/{c.name}/valid"]
+    for i, c in enumerate(rec.channels.values()):
+        names += [f"ch/{i}/values", f"ch/{i}/valid"]
         cols += [_padded(c.values, n_rows, pa.float64()), _padded(c.valid, n_rows, pa.bool_())]
-    for s in rec.slow.values():
-        names += [f"slow/{s.name}/time_s", f"slow/{s.name}/value"]
+    for i, s in enumerate(rec.slow.values()):
+        names += [f"slow/{i}/time_s", f"slow/{i}/value"]
         cols += [_padded(s.time_s, n_rows, pa.float64()), _padded(s.values, n_rows, pa.float64())]
+    text = json.dumps(doc).encode()
     schema = pa.schema([pa.field(n, c.type) for n, c in zip(names, cols, strict=True)],
-                       metadata={META_KEY: json.dumps(doc).encode()})
+                       metadata={META_KEY: text,
+                                 DIGEST_KEY: hashlib.sha256(text).hexdigest().encode()})
     table = pa.Table.from_arrays(cols, schema=schema)
-    pq.write_table(table, p, compression="zstd", row_group_size=1 << 20)
+    pq.write_table(table, p, compression="zstd", row_group_size=1 << 20,
+                   write_page_checksum=True)
     return p
 
 
@@ -144,13 +152,16 @@ def read_parquet(path: str | Path) -> Recording:
     """
     p = Path(path)
     try:
-        pf = pq.ParquetFile(p)
+        pf = pq.ParquetFile(p, page_checksum_verification=True)
         meta = pf.schema_arrow.metadata or {}
     except (pa.ArrowException, OSError) as exc:
         raise RecordingFormatError(p, 0, "a Parquet file", str(exc)[:200]) from exc
     if META_KEY not in meta:
         raise RecordingFormatError(p, None, "a rigtools normalized recording",
                                    "Parquet without 'rigtools.recording' metadata")
+    if meta.get(DIGEST_KEY) != hashlib.sha256(meta[META_KEY]).hexdigest().encode():
+        raise RecordingFormatError(p, "metadata 'rigtools.recording'",
+                                   "the SHA-256 stored beside it", "a mismatch (damaged file)")
     try:
         doc = json.loads(meta[META_KEY])
     except ValueError as exc:
@@ -164,21 +175,24 @@ def read_parquet(path: str | Path) -> Recording:
     except (pa.ArrowException, OSError) as exc:
         raise RecordingFormatError(p, None, "readable Parquet row groups", str(exc)[:200]) from exc
     channels = {}
-    for c in doc["channels"]:
+    for i, c in enumerate(doc["channels"]):
         n = c["n_samples"]
         channels[c["name"]] = Channel(
             c["name"], c["unit"], float(c["sample_rate_Hz"]), float(c["start_time_s"]),
             int(c["first_index"]),
-            _column(table, f"ch/{c['name']}", n, p).astype(np.float64, copy=False),
-            _column(table, f"ch/{c['name']}/valid", n, p).astype(bool, copy=False),
+            _column(table, f"ch/{i}/values", n, p).astype(np.float64, copy=False),
+            _column(table, f"ch/{i}/valid", n, p).astype(bool, copy=False),
         )
     slow = {}
-    for s in doc["slow"]:
+    for i, s in enumerate(doc["slow"]):
         n = s["n_samples"]
         slow[s["name"]] = SlowSignal(
             s["name"], s["unit"],
-            _column(table, f"slow/{s['name']}/time_s", n, p).astype(np.float64, copy=False),
-            _column(table, f"slow/{s['name']}/value", n, p).astype(np.float64, copy=False),
+            _column(table, f"slow/{i}/time_s", n, p).astype(np.float64, copy=False),
+            _column(table, f"slow/{i}/value", n, p).astype(np.float64, copy=False),
         )
+    if len(channels) != len(doc["channels"]) or len(slow) != len(doc["slow"]):
+        raise RecordingFormatError(p, "metadata 'rigtools.recording'",
+                                   "unique channel and slow-signal names", "repeated names")
     return Recording(channels, slow, RunMetadata.from_dict(doc["metadata"]),
                      Provenance.from_dict(doc["provenance"]))

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import functools
+import json
+import math
+import re
 import sys
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -18,6 +21,9 @@ from rigtools.ingest.registry import detect_format, open_source, reader_module, 
 from rigtools.schemas import schema_path
 
 __all__ = ["read", "versions"]
+
+# Condition keys carry their unit (data_schemas/run_metadata.schema.json).
+_CONDITION_KEY = re.compile(r"^[a-z][a-z0-9_]*_(Nm|C|K|rpm|Hz|s|m|um|kW|bar|Pa)$")
 
 
 @functools.cache
@@ -116,7 +122,7 @@ def _read_with(
     builder = RecordingBuilder(str(p), report)
     layout_desc: dict[str, Any]
     extra: dict[str, str] = {}
-    with open_source(p) as stream:
+    with open_source(p, report) as stream:
         if module.KIND == "can":
             dbc_file = Path(dbc) if dbc is not None else schema_path("rig_reference.dbc")
             db = load_dbc(dbc_file, strict=strict_dbc)
@@ -129,7 +135,9 @@ def _read_with(
             layout_desc = {"source": "mapping" if mapping else "mcap-schemas"}
             if mapping is not None:
                 layout_desc["mapping"] = mapping.to_dict()
-    meta = _merge_metadata(extra, mapping, metadata)
+    meta = _merge_metadata(extra, mapping, metadata, report)
+    # Through JSON once, so the layout compares equal after a Parquet round trip.
+    layout_desc = json.loads(json.dumps(layout_desc))
     digest, size = hashing.result()
     prov = Provenance(str(p), digest, size, kind, versions(), report, layout_desc)
     rec = builder.build(meta, prov)
@@ -143,7 +151,10 @@ def _read_with(
 
 
 def _merge_metadata(
-    extra: dict[str, str], mapping: ChannelMapping | None, given: RunMetadata | None
+    extra: dict[str, str],
+    mapping: ChannelMapping | None,
+    given: RunMetadata | None,
+    report: IngestReport,
 ) -> RunMetadata:
     if given is not None:
         return given
@@ -153,10 +164,17 @@ def _merge_metadata(
     rest: dict[str, str] = {}
     for k, v in extra.items():
         if k.startswith("conditions."):
+            name = k.removeprefix("conditions.")
             try:
-                conditions[k.removeprefix("conditions.")] = float(v)
+                value = float(v)
             except ValueError:
-                rest[k] = v
+                value = math.nan
+            if _CONDITION_KEY.match(name) and math.isfinite(value):
+                conditions[name] = value
+            else:  # kept, but not as a condition: no unit in the key, or not a number
+                rest[k] = str(v)
+                report.warn(f"run metadata {k!r} = {v!r} is not a condition (a finite number "
+                            "under a key ending in its unit, e.g. torque_Nm); kept as text")
         elif k not in ("run_id", "rig", "gear_set"):
             rest[k] = v
     return RunMetadata(extra.get("run_id"), extra.get("rig"), extra.get("gear_set"), conditions,

@@ -1,5 +1,6 @@
 """RecordingBuilder (grid, gaps, duplicates, non-finite) and the Parquet round trip."""
 
+import hashlib
 import json
 
 import numpy as np
@@ -50,9 +51,23 @@ def test_non_finite_samples_kept_but_marked_invalid_and_counted():
     assert rep.rejected["non_finite_sample"] == 3
 
 
-def test_absurd_counter_span_is_refused_without_allocating_it():
-    with pytest.raises(RecordingFormatError, match="sample counter is corrupt"):
-        _build([([0, 1], [0.0, 1.0]), ([2**40], [3.0])])
+def test_absurd_counter_keeps_the_intact_run_without_allocating_the_span():
+    import tracemalloc
+
+    tracemalloc.start()
+    rec, rep = _build([([0, 1, 2], [0.0, 1.0, 2.0]), ([2**40], [3.0]), ([3], [3.0])])
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert peak < 50e6
+    assert rec.channels["acc"].values.tolist() == [0.0, 1.0, 2.0, 3.0]
+    assert rep.rejected["implausible_sample_index"] == 1
+
+
+def test_non_finite_slow_points_are_counted_or_reported():
+    rec, rep = _build([([0], [0.0])], slow={"t": ([1.0, np.nan, 2.0], [1.0, 2.0, np.inf])})
+    assert rec.slow["t"].time_s.tolist() == [1.0, 2.0]
+    assert rep.rejected["non_finite_timestamp"] == 1
+    assert any("non-finite value" in w for w in rep.warnings)
 
 
 def test_slow_signal_sorted_when_stamps_go_backwards_nothing_dropped():
@@ -91,7 +106,14 @@ def test_parquet_with_metadata_claiming_more_samples_than_stored_is_refused(tmp_
     table = pq.read_table(p)
     doc = json.loads(table.schema.metadata[b"rigtools.recording"])
     doc["channels"][0]["n_samples"] = 10
-    bad = table.replace_schema_metadata({b"rigtools.recording": json.dumps(doc).encode()})
+    text = json.dumps(doc).encode()
+    forged = table.replace_schema_metadata({b"rigtools.recording": text})
+    pq.write_table(forged, tmp_path / "forged.parquet")
+    with pytest.raises(RecordingFormatError, match="expected the SHA-256 stored beside it"):
+        read_parquet(tmp_path / "forged.parquet")
+    digest = hashlib.sha256(text).hexdigest().encode()
+    bad = table.replace_schema_metadata({b"rigtools.recording": text,
+                                         b"rigtools.recording.sha256": digest})
     pq.write_table(bad, tmp_path / "bad.parquet")
     with pytest.raises(RecordingFormatError, match="at least 10 rows"):
         read_parquet(tmp_path / "bad.parquet")
@@ -113,3 +135,31 @@ def test_rows_of_raw_ints_with_partial_overlap_and_conversion_stages():
     assert ch.valid.tolist() == [True] * 7 + [False] * 3 + [True] * 2
     assert rep.rejected["duplicate_sample"] == 2
     assert [(g.start_index, g.n_missing) for g in rep.gaps] == [(7, 3)]
+
+
+def test_channel_names_that_look_like_column_suffixes_round_trip(tmp_path):
+    rep = IngestReport()
+    b = RecordingBuilder("mem", rep)
+    b.add_samples("a", "m/s^2", 10.0, 0, np.array([1.0, 2.0]))
+    b.add_samples("a/valid", "m/s^2", 10.0, 0, np.array([3.0]))
+    b.add_slow("a/values", "rpm", np.array([0.0]), np.array([5.0]))
+    rec = b.build(RunMetadata(), Provenance("mem", "0" * 64, 0, "t", {}, rep))
+    assert read_parquet(write_parquet(rec, tmp_path / "r.parquet")).equals(rec)
+
+
+def test_flipped_bits_in_a_normalized_recording_never_read_back_as_other_values(tmp_path):
+    rng = np.random.default_rng(5)
+    rec, _ = _build([(np.arange(5000), rng.normal(size=5000))])
+    good = write_parquet(rec, tmp_path / "good.parquet").read_bytes()
+    bad = tmp_path / "bad.parquet"
+    silent = 0
+    for pos in rng.choice(len(good), 400, replace=False):
+        data = bytearray(good)
+        data[pos] ^= 1 << int(rng.integers(8))
+        bad.write_bytes(bytes(data))
+        try:
+            back = read_parquet(bad)
+        except RecordingFormatError:
+            continue
+        silent += not back.equals(rec)
+    assert silent == 0

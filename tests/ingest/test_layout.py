@@ -133,3 +133,17 @@ def test_mapping_naming_a_missing_signal_is_refused(tmp_path):
     (tmp_path / "map.toml").write_text(MAPPING.replace('"AccZ"', '"AccQ"'))
     with pytest.raises(MappingError, match="no signal 'AccQ'"):
         can_layout(load_dbc(tmp_path / "user.dbc"), load_mapping(tmp_path / "map.toml"))
+
+
+def test_counter_restart_is_a_restart_gap_and_nothing_after_it_is_lost():
+    db = load_dbc(schema_path("rig_reference.dbc"))
+    layout = can_layout(db, None, "rig_reference.dbc")
+    counters = [*range(1000, 1100), *range(0, 100)]
+    rows = [{"Acc1_Counter": c, "Acc1_S0": 0.0, "Acc1_S1": 0.015, "Acc1_S2": 0.03}
+            for c in counters]
+    t = [i * 3 / 25600 for i in range(100)] + [1.0 + i * 3 / 25600 for i in range(100)]
+    rec, rep = _assemble(db, layout, [_frames(db, "ACC1", rows, t)])
+    ch = rec.channels["accel_1"]
+    assert ch.valid.sum() == 600
+    assert [g.kind for g in rep.gaps] == ["restart"]
+    assert any("restarted" in w for w in rep.warnings)
