@@ -83,3 +83,26 @@ def test_debug_re_raises(tmp_path):
 
     with pytest.raises(RecordingFormatError, match="empty"):
         main(["--debug", "info", str(p)])
+
+
+@pytest.mark.parametrize("target", ["missing/dir/out.parquet", "."])
+def test_unwritable_output_is_an_error_not_a_traceback(tmp_path, blf_file, capsys, target):
+    path, _, _ = blf_file
+    out = tmp_path / target
+    assert main(["ingest", str(path), "-o", str(out)]) == EXIT_UNUSABLE
+    err = capsys.readouterr().err
+    assert err.startswith("rigtools: error: ") and "Traceback" not in err
+
+
+def test_sample_level_losses_are_reported_in_samples(tmp_path, capsys):
+    from rigtools.demo.mcap_writer import write_accel_mcap
+
+    vals = np.arange(3000, dtype=float)
+    vals[10:60] = np.nan
+    p = write_accel_mcap(tmp_path / "nan.mcap", {"accel_1": (vals, 1000.0, "m/s^2", 0, 1.7e9)},
+                         batch=100)
+    assert main(["info", str(p)]) == 0
+    cap = capsys.readouterr()
+    assert "50 samples rejected: non_finite_sample" in cap.err
+    assert main(["info", "--json", str(p)]) == 0
+    json.loads(capsys.readouterr().out)  # strict JSON: no bare NaN

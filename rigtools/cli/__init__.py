@@ -84,6 +84,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         print(f"rigtools: error: {exc}", file=sys.stderr)
         return EXIT_UNUSABLE
+    except OSError as exc:  # an output path that cannot be written, a disk that is full
+        if args.debug:
+            raise
+        where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
+        print(f"rigtools: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return EXIT_UNUSABLE
     except KeyboardInterrupt:
         print("rigtools: interrupted", file=sys.stderr)
         return 130

@@ -7,7 +7,15 @@ import sys
 
 from rigtools.ingest import Recording, read
 
-__all__ = ["add_read_options", "read_from_args", "warn_losses"]
+__all__ = ["add_read_options", "read_from_args", "unit_of", "warn_losses"]
+
+#: Rejection reasons that count samples or points, not frames or messages.
+_SAMPLE_REASONS = ("_sample", "_sample_index", "_timestamp", "inconsistent_channel_layout")
+
+
+def unit_of(reason: str, units: str) -> str:
+    """What a rejection count counts: samples for sample-level reasons, else ``units``."""
+    return "samples" if reason.endswith(_SAMPLE_REASONS) else units
 
 
 def add_read_options(p: argparse.ArgumentParser) -> None:
@@ -28,7 +36,8 @@ def warn_losses(rec: Recording) -> None:
     for reason, n in sorted(rep.rejected.items()):
         where = rep.first_position.get(reason)
         at = f" (first at {where})" if where else ""
-        print(f"rigtools: warning: {n} {rep.units} rejected: {reason}{at}", file=sys.stderr)
+        print(f"rigtools: warning: {n} {unit_of(reason, rep.units)} rejected: {reason}{at}",
+              file=sys.stderr)
     if rep.gaps:
         missing = sum(g.n_missing for g in rep.gaps)
         print(f"rigtools: warning: {len(rep.gaps)} gap(s) in sample counters, "

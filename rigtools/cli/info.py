@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from rigtools.cli._common import add_read_options, read_from_args, warn_losses
+from rigtools.cli._common import add_read_options, read_from_args, unit_of, warn_losses
 from rigtools.ingest import Recording
 
 __all__ = ["add_parser", "format_info", "run"]
@@ -53,14 +53,31 @@ def summary(rec: Recording) -> dict[str, Any]:
                 "name": s.name,
                 "unit": s.unit,
                 "n_points": len(s),
-                "min": float(np.nanmin(s.values)) if len(s) else None,
-                "max": float(np.nanmax(s.values)) if len(s) else None,
+                "min": _finite_or_none(s.values, np.min),
+                "max": _finite_or_none(s.values, np.max),
             }
             for s in rec.slow.values()
         ],
         "metadata": rec.metadata.to_dict(),
         "report": rep.to_dict(),
     }
+
+
+def _json_safe(obj: Any) -> Any:
+    """Non-finite floats to None, recursively (strict JSON has no NaN or Infinity)."""
+    if isinstance(obj, float):
+        return obj if np.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_json_safe(v) for v in obj]
+    return obj
+
+
+def _finite_or_none(values: np.ndarray, reduce: Any) -> float | None:
+    """Extreme of the finite values, or None (JSON has no NaN)."""
+    finite = values[np.isfinite(values)]
+    return float(reduce(finite)) if finite.size else None
 
 
 def format_info(rec: Recording) -> str:
@@ -97,7 +114,7 @@ def format_info(rec: Recording) -> str:
         for reason, n in sorted(rep.rejected.items()):
             where = rep.first_position.get(reason, "")
             at = f"  (first at {where})" if where else ""
-            lines.append(f"rejected  {n:>10}  {reason}{at}")
+            lines.append(f"rejected  {n:>10}  {unit_of(reason, rep.units):<9}{reason}{at}")
     else:
         lines.append("rejected  none")
     if rep.gaps:
@@ -123,7 +140,7 @@ def run(args: argparse.Namespace) -> int:
     """Run the subcommand."""
     rec = read_from_args(args)
     if args.json:
-        print(json.dumps(summary(rec), indent=2))
+        print(json.dumps(_json_safe(summary(rec)), indent=2, allow_nan=False))
     else:
         print(format_info(rec))
     warn_losses(rec)

@@ -13,6 +13,7 @@ Two sources:
 
 from __future__ import annotations
 
+import math
 import re
 import tomllib
 from dataclasses import asdict, dataclass, field
@@ -160,6 +161,18 @@ def load_mapping(path: str | Path) -> ChannelMapping:
         )
         for s in doc.get("slow", [])
     )
+    for kind, entries in (("uniform", uniform), ("slow", slow)):
+        for i, e in enumerate(entries):
+            for attr in ("sample_rate_Hz", "scale", "offset"):
+                v = getattr(e, attr, 0.0)
+                if not math.isfinite(v):
+                    raise MappingError(p, _line_of(text, attr), f"a finite number for "
+                                       f"{kind}[{i}].{attr}", repr(v))
+    if "run" in doc:
+        for k, v in doc["run"].get("conditions", {}).items():
+            if not math.isfinite(float(v)):
+                raise MappingError(p, _line_of(text, "conditions"),
+                                   f"a finite number for run.conditions.{k}", repr(v))
     names = [u.channel for u in uniform] + [s.name for s in slow]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
@@ -261,6 +274,10 @@ def can_layout(db: Any, mapping: ChannelMapping | None = None, dbc_path: str = "
             msg = _find_message(db, s.message, where)
             sig = _find_signal(msg, s.signal or "", where)
             slow.append(CanSlow(s, msg, sig, s.unit if s.unit is not None else (sig.unit or "")))
+        if not uniform and not slow:
+            raise MappingError(mapping.source or "<mapping>", None,
+                               "[[uniform]] or [[slow]] entries naming a DBC message",
+                               "only MCAP entries (topic/field), and this file is a CAN log")
         desc = {"source": "mapping", "mapping": mapping.to_dict(), "dbc": dbc_path}
         return CanLayout(db, tuple(uniform), tuple(slow), desc)
     for msg in db.messages:

@@ -147,3 +147,18 @@ def test_counter_restart_is_a_restart_gap_and_nothing_after_it_is_lost():
     assert ch.valid.sum() == 600
     assert [g.kind for g in rep.gaps] == ["restart"]
     assert any("restarted" in w for w in rep.warnings)
+
+
+def test_non_finite_numbers_in_a_mapping_are_refused(tmp_path):
+    p = tmp_path / "map.toml"
+    p.write_text(MAPPING.replace("scale = 9.80665", "scale = nan"))
+    with pytest.raises(MappingError, match=r"line \d+: expected a finite number for uniform\[0\]"):
+        load_mapping(p)
+
+
+def test_mcap_only_mapping_on_a_can_log_says_so(tmp_path):
+    p = tmp_path / "map.toml"
+    p.write_text("[[uniform]]\nchannel='a'\ntopic='/imu'\nfield='x'\nsample_rate_Hz=100\n")
+    db = load_dbc(schema_path("rig_reference.dbc"))
+    with pytest.raises(MappingError, match="only MCAP entries"):
+        can_layout(db, load_mapping(p))
