@@ -19,6 +19,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
+import pandas as pd
 
 from rigtools.ingest.builder import MAX_CLOCK_POINTS, RecordingBuilder
 from rigtools.ingest.dbc import decode_signal, multiplex_mask, signal_raw
@@ -48,32 +49,38 @@ def assemble_can(
     builder: RecordingBuilder,
     report: IngestReport,
 ) -> None:
-    """Decode every batch into ``builder`` following ``layout``; tally every frame."""
+    """Decode every batch into ``builder`` following ``layout``; tally every frame.
+
+    A message of the layout seen on more than one bus channel gives one channel per bus,
+    named ``<channel>@bus<n>`` (python-can channel numbering): two sensor sets with the same
+    layout on can0 and can1 are two sets of channels, never one interleaved channel.
+    """
     known = {(int(m.frame_id), bool(m.is_extended_frame)) for m in layout.db.messages}
     used = layout.messages_used()
-    uniform_by_key: dict[tuple[int, bool], list[_UniformAcc]] = {}
-    accs: list[_UniformAcc] = []
-    for u in layout.uniform:
-        acc = _UniformAcc(u)
-        accs.append(acc)
+    uniform_by_key: dict[tuple[int, bool], list[int]] = {}
+    for i, u in enumerate(layout.uniform):
         key = (int(u.message.frame_id), bool(u.message.is_extended_frame))
-        uniform_by_key.setdefault(key, []).append(acc)
-    slow_by_key: dict[tuple[int, bool], list] = {}
-    for s in layout.slow:
+        uniform_by_key.setdefault(key, []).append(i)
+    slow_by_key: dict[tuple[int, bool], list[int]] = {}
+    for i, s in enumerate(layout.slow):
         key = (int(s.message.frame_id), bool(s.message.is_extended_frame))
-        slow_by_key.setdefault(key, []).append(s)
+        slow_by_key.setdefault(key, []).append(i)
+    accs: dict[tuple[int, int], _UniformAcc] = {}  # (uniform index, bus) -> samples so far
+    slow_parts: dict[tuple[int, int], list[tuple[np.ndarray, np.ndarray]]] = {}
 
     for batch in batches:
         n = len(batch)
         if n == 0:
             continue
         key_arr = batch.arbitration_id.astype(np.int64) | (batch.is_extended.astype(np.int64) << 32)
-        order = np.argsort(key_arr, kind="stable")
-        sorted_keys = key_arr[order]
-        starts = np.flatnonzero(np.r_[True, sorted_keys[1:] != sorted_keys[:-1]])
-        ends = np.r_[starts[1:], n]
-        for a, b in zip(starts, ends, strict=True):
-            k = int(sorted_keys[a])
+        # Few distinct identifiers: hash them to small codes and radix-sort the codes.
+        codes, uniques = pd.factorize(key_arr)
+        order = np.argsort(codes.astype(np.int32), kind="stable")
+        counts = np.bincount(codes, minlength=len(uniques))
+        bounds = np.r_[0, np.cumsum(counts)]  # rows of code c: order[bounds[c]:bounds[c+1]]
+        for code in range(len(uniques)):
+            a, b = int(bounds[code]), int(bounds[code + 1])
+            k = int(uniques[code])
             key = (k & 0xFFFFFFFF, bool(k >> 32))
             rows = order[a:b]
             if key not in known:
@@ -90,23 +97,55 @@ def assemble_can(
                 rows = rows[~short]
                 if rows.size == 0:
                     continue
-            data = batch.data[rows]
-            stamps = batch.timestamp_s[rows]
             report.decoded += int(rows.size)
-            for acc in uniform_by_key.get(key, ()):
-                _decode_uniform(acc, data, stamps, batch.where(int(rows[0])))
-            for s in slow_by_key.get(key, ()):
-                vals = decode_signal(data, s.signal)
-                t = stamps
-                mask = multiplex_mask(data, message, s.signal)
-                if mask is not None:
-                    vals, t = vals[mask], t[mask]
-                if s.spec.scale != 1.0 or s.spec.offset != 0.0:
-                    vals = vals * s.spec.scale + s.spec.offset
-                builder.add_slow(s.spec.name, s.unit, t, vals)
+            bus_of_rows = batch.channel[rows]
+            buses = ([int(bus_of_rows[0])] if np.all(bus_of_rows == bus_of_rows[0])
+                     else np.unique(bus_of_rows).tolist())
+            for bus in buses:
+                bus_rows = rows if len(buses) == 1 else rows[bus_of_rows == bus]
+                data = batch.data[bus_rows]
+                stamps = batch.timestamp_s[bus_rows]
+                for ui in uniform_by_key.get(key, ()):
+                    acc = accs.get((ui, bus))
+                    if acc is None:
+                        acc = accs[(ui, bus)] = _UniformAcc(layout.uniform[ui])
+                    _decode_uniform(acc, data, stamps, batch.where(int(bus_rows[0])))
+                for si in slow_by_key.get(key, ()):
+                    s = layout.slow[si]
+                    vals = decode_signal(data, s.signal)
+                    t = stamps
+                    mask = multiplex_mask(data, message, s.signal)
+                    if mask is not None:
+                        vals, t = vals[mask], t[mask]
+                    if s.spec.scale != 1.0 or s.spec.offset != 0.0:
+                        vals = vals * s.spec.scale + s.spec.offset
+                    slow_parts.setdefault((si, bus), []).append((t, vals))
 
-    for acc in accs:
-        _finish_uniform(acc, builder, report)
+    uniform_buses = _buses_by_index(accs)
+    for (ui, bus), acc in accs.items():
+        name = _bus_name(acc.spec.spec.channel, bus, uniform_buses[ui], report)
+        _finish_uniform(acc, name, builder, report)
+    slow_buses = _buses_by_index(slow_parts)
+    for (si, bus), parts in slow_parts.items():
+        s = layout.slow[si]
+        name = _bus_name(s.spec.name, bus, slow_buses[si], report)
+        for t, vals in parts:
+            builder.add_slow(name, s.unit, t, vals)
+
+
+def _buses_by_index(d: dict[tuple[int, int], object]) -> dict[int, set[int]]:
+    out: dict[int, set[int]] = {}
+    for i, bus in d:
+        out.setdefault(i, set()).add(bus)
+    return out
+
+
+def _bus_name(name: str, bus: int, buses: set[int], report: IngestReport) -> str:
+    if len(buses) == 1:
+        return name
+    report.warn(f"{name!r} arrives on bus channels {sorted(buses)}: kept apart as "
+                f"{', '.join(repr(f'{name}@bus{b}') for b in sorted(buses))}")
+    return f"{name}@bus{bus}"
 
 
 def _decode_uniform(
@@ -133,7 +172,9 @@ def _decode_uniform(
         acc.counters.append(signal_raw(data, u.counter)[0])
 
 
-def _finish_uniform(acc: _UniformAcc, builder: RecordingBuilder, report: IngestReport) -> None:
+def _finish_uniform(
+    acc: _UniformAcc, name: str, builder: RecordingBuilder, report: IngestReport
+) -> None:
     u = acc.spec
     if not acc.raws:
         return
@@ -146,7 +187,6 @@ def _finish_uniform(acc: _UniformAcc, builder: RecordingBuilder, report: IngestR
         np.add(rel, base, out=stamps[row : row + rel.size], dtype=np.float64)
         row += rel.size
     acc.stamps.clear()
-    name = u.spec.channel
     if u.counter is not None:
         # Raw counter bits (a DBC scale on a counter is ignored: it counts frames).
         counters = np.concatenate(acc.counters).astype(np.int64)

@@ -162,3 +162,21 @@ def test_mcap_only_mapping_on_a_can_log_says_so(tmp_path):
     db = load_dbc(schema_path("rig_reference.dbc"))
     with pytest.raises(MappingError, match="only MCAP entries"):
         can_layout(db, load_mapping(p))
+
+
+def test_same_layout_on_two_buses_gives_two_channels_not_one_interleaved():
+    import dataclasses
+
+    db = load_dbc(schema_path("rig_reference.dbc"))
+    layout = can_layout(db, None, "rig_reference.dbc")
+    rows = [{"Acc1_Counter": c, "Acc1_S0": 0.015 * c, "Acc1_S1": 0.0, "Acc1_S2": 0.0}
+            for c in range(50)]
+    t = [c * 3 / 25600 for c in range(50)]
+    a = _frames(db, "ACC1", rows, t)
+    b = dataclasses.replace(_frames(db, "ACC1", [dict(r, Acc1_S1=1.5) for r in rows], t),
+                            channel=np.ones(50, np.int16))
+    rec, rep = _assemble(db, layout, [a, b])
+    assert set(rec.channels) == {"accel_1@bus0", "accel_1@bus1"}
+    assert rec.channels["accel_1@bus0"].values[1::3].tolist() == [0.0] * 50
+    assert rec.channels["accel_1@bus1"].values[1::3].tolist() == [1.5] * 50
+    assert not rep.rejected and any("kept apart" in w for w in rep.warnings)
