@@ -106,3 +106,25 @@ def test_sample_level_losses_are_reported_in_samples(tmp_path, capsys):
     assert "50 samples rejected: non_finite_sample" in cap.err
     assert main(["info", "--json", str(p)]) == 0
     json.loads(capsys.readouterr().out)  # strict JSON: no bare NaN
+
+
+def test_round_trip_is_exact_with_a_mapping_too(tmp_path, blf_file):
+    path, chans, _ = blf_file
+    m = tmp_path / "map.toml"
+    m.write_text(
+        "[run]\nrun_id = 'mapped'\nconditions = { torque_Nm = 302.0 }\n\n"
+        "[[uniform]]\nchannel = 'pinion_radial'\nmessage = 'ACC1'\n"
+        "samples = ['Acc1_S0', 'Acc1_S1', 'Acc1_S2']\ncounter = 'Acc1_Counter'\n"
+        "sample_rate_Hz = 25600.0\nunit = 'g'\nscale = 0.10197162129779283\n\n"
+        "[[slow]]\nname = 'torque_Nm'\nmessage = 'TORQUE'\nsignal = 'Torque_Nm'\n"
+    )
+    out = tmp_path / "mapped.parquet"
+    assert main(["ingest", str(path), "--map", str(m), "-o", str(out)]) == 0
+    direct = read(path, mapping=m)
+    assert read(out).equals(direct)
+    assert set(direct.channels) == {"pinion_radial"} and direct.channels["pinion_radial"].unit == "g"
+    np.testing.assert_allclose(direct.channels["pinion_radial"].values, chans[0] / 9.80665,
+                               rtol=1e-15)
+    assert direct.metadata.run_id == "mapped"
+    # Frames of messages the mapping does not use are counted, not dropped silently.
+    assert direct.report.rejected["message_not_in_layout"] > 0
