@@ -1,0 +1,17 @@
+"""Spur gear pair geometry: radii, pressure angles, contact ratio, the path of contact."""
+
+from models.geometry.gear_pair import STEEL, Gear, GearPair, Material
+from models.geometry.gear_sets import GearSet, load_gear_set, shipped_gear_sets
+from models.geometry.involute import inv, inv_inverse
+
+__all__ = [
+    "STEEL",
+    "Gear",
+    "GearPair",
+    "GearSet",
+    "Material",
+    "inv",
+    "inv_inverse",
+    "load_gear_set",
+    "shipped_gear_sets",
+]
