@@ -1,14 +1,21 @@
 """Vector ASC reader: write/read-back with python-can's ASCWriter, hostile files, sniffing.
 
-Timestamps: ASCWriter writes ``t - t_first`` with 6 decimals (1 µs). Messages whose times lie
-on the microsecond grid and start at 0 come back bit for bit; arbitrary times come back within
-0.5 µs of ``t - t_first`` (the only tolerance, forced by the text format).
+Timestamps are absolute, as python-can's ``ASCReader(..., relative_timestamp=False)`` gives
+them: the ``Begin Triggerblock`` date (else the ``date`` line) plus each line's offset.
+ASCWriter writes that date as the first message's local time truncated to the millisecond,
+and ``t - t_first`` with 6 decimals (1 µs). Messages whose times lie on the microsecond grid
+and start at 0 come back bit for bit; arbitrary times come back within 0.5 µs (plus float64
+rounding at ~1e9 s) of ``start + t - t_first``, ``start`` being ``t_first`` truncated to the
+millisecond: the tolerances the text format forces.
 """
 
 from __future__ import annotations
 
 import gzip
 import importlib
+import time
+from collections.abc import Callable, Iterator
+from datetime import datetime
 from pathlib import Path
 
 import can
@@ -57,6 +64,36 @@ def data_lines(path: Path) -> list[int]:
     return [i for i, s in enumerate(lines, 1) if (" Rx " in s or " Tx " in s)]
 
 
+def written_ms(t_first: float) -> int:
+    """The milliseconds ASCWriter writes in its ``Begin Triggerblock`` date (local time)."""
+    return datetime.fromtimestamp(t_first).microsecond // 1000
+
+
+def asc_start(t_first: float) -> float:
+    """The measurement start python-can reads back from ASCWriter's ``Begin Triggerblock`` date.
+
+    ASCWriter writes ``datetime.fromtimestamp(t_first)`` (local time) with the microseconds
+    truncated to milliseconds, *without leading zeros* (``.62`` for 62 ms); python-can parses
+    the digits as a fraction of a second (``.62`` -> 620 ms), in local time.
+    """
+    dt = datetime.fromtimestamp(t_first)
+    fraction = f"0.{written_ms(t_first)}"
+    return dt.replace(microsecond=round(float(fraction) * 1e6)).timestamp()
+
+
+@pytest.fixture
+def tz(monkeypatch: pytest.MonkeyPatch) -> Iterator[Callable[[str], None]]:
+    """Set the process time zone (python-can reads ASC dates in local time); restored after."""
+
+    def set_tz(name: str) -> None:
+        monkeypatch.setenv("TZ", name)
+        time.tzset()
+
+    yield set_tz
+    monkeypatch.undo()
+    time.tzset()
+
+
 BASIC = [
     msg(0.0, 0x123, bytes([1, 2, 3, 4, 5, 6, 7, 8]), channel=0),
     msg(0.001234, 0x7FF, b"", channel=1),
@@ -83,12 +120,18 @@ def test_read_back_is_bit_exact(tmp_path: Path) -> None:
     assert report.warnings == []
 
 
-def test_frames_equal_python_can_reader(tmp_path: Path) -> None:
-    path = write_asc(tmp_path / "basic.asc", BASIC)
-    got, _ = read(path)
-    with can.ASCReader(str(path)) as r:
+@pytest.mark.parametrize("t0", [0.0, 1_700_000_000.123_456_7])
+def test_frames_equal_python_can_reader(tmp_path: Path, t0: float) -> None:
+    messages = [msg(t0 + m.timestamp, m.arbitration_id, bytes(m.data), ext=m.is_extended_id,
+                    fd=m.is_fd, channel=m.channel, bitrate_switch=m.bitrate_switch)
+                for m in BASIC]
+    path = write_asc(tmp_path / "basic.asc", messages)
+    got, report = read(path)
+    with can.ASCReader(str(path), relative_timestamp=False) as r:
         ref = list(r)
     assert got.equals(from_messages(ref, data_lines(path), "line"))
+    assert report.warnings == []
+    assert got.timestamp_s[0] == asc_start(t0)  # absolute: the trigger-block date
 
 
 def test_small_batches_cover_every_frame(tmp_path: Path) -> None:
@@ -124,8 +167,12 @@ _fd = st.builds(
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(frames=st.lists(st.one_of(_classic, _fd), min_size=1, max_size=30),
        t0=st.floats(0, 2e9), gaps=st.lists(st.floats(0, 10), min_size=30, max_size=30))
-def test_read_back_property(tmp_path: Path, frames, t0: float, gaps: list[float]) -> None:
-    """Any classic/FD frames at any times: equal to what was written, times within 0.5 µs."""
+def test_read_back_property(tmp_path: Path, tz, frames, t0: float, gaps: list[float]) -> None:
+    """Any classic/FD frames at any times: equal to what was written.
+
+    Times come back within 0.5 µs of the millisecond start plus the offsets.
+    """
+    tz("UTC")  # no daylight-saving fold: a local date in the repeated hour reads back 1 h off
     stamps = t0 + np.cumsum([0.0, *gaps[: len(frames) - 1]])
     messages = [msg(float(t), arb, data, ext=ext, fd=fd, channel=ch)
                 for t, (arb, ext, fd, data, ch) in zip(stamps, frames, strict=True)]
@@ -140,8 +187,199 @@ def test_read_back_property(tmp_path: Path, frames, t0: float, gaps: list[float]
         "line")
     assert same_t.equals(want, compare_position=True)
     np.testing.assert_array_equal(got.channel, want.channel)
-    # ASCWriter writes t - t_first rounded to 1 µs; python-can reads it relative (start 0)
-    np.testing.assert_allclose(got.timestamp_s, stamps - stamps[0], rtol=0, atol=0.5e-6 + 1e-9)
+    # ASCWriter writes t_first truncated to the millisecond (trigger-block date) and
+    # t - t_first rounded to 1 µs; python-can adds them. Float64 near 2e9 s has 0.24 µs steps
+    # (ASCWriter's subtraction, python-can's addition, this test's subtraction).
+    start = asc_start(stamps[0])
+    ms = written_ms(stamps[0])
+    if ms == 0 or ms >= 100:  # three digits (or ".0"): the start truncated to the millisecond
+        assert 0 <= stamps[0] - start < 1e-3 + 0.5e-6
+        assert not any("the start date" in w for w in report.warnings)
+    else:  # ASCWriter's ".62" for 62 ms reads 620 ms: late, and said so
+        assert start - stamps[0] == pytest.approx(float(f"0.{ms}") - ms / 1000, abs=1e-3)
+        assert any("the start date (line 4) has" in w for w in report.warnings)
+    np.testing.assert_allclose(got.timestamp_s, start + (stamps - stamps[0]), rtol=0,
+                               atol=0.5e-6 + 3 * np.spacing(2e9))
+
+
+# --- absolute time stamps --------------------------------------------------------------------
+
+def _frames_text(*frame_lines: str) -> str:
+    return "".join(f"{line}\n" for line in frame_lines)
+
+
+FRAMES = _frames_text("   0.000000 Start of measurement",
+                      "   1.000000 1  100  Rx   d 1 01",
+                      "   2.500000 1  101  Rx   d 1 02")
+
+
+def test_trigger_block_date_wins_over_the_date_line(tmp_path: Path, tz) -> None:
+    """python-can's rule: the ``Begin Triggerblock`` date, else the ``date`` header line."""
+    tz("UTC")
+    head = "date Sat Sep 30 15:06:13.191 2017\nbase hex  timestamps absolute\n" \
+           "internal events logged\n"
+    with_trigger = tmp_path / "trigger.asc"
+    with_trigger.write_text(head + "Begin Triggerblock Sat Sep 30 10:06:13.191 PM 2017\n"
+                            + FRAMES + "End TriggerBlock\n")
+    date_only = tmp_path / "date_only.asc"
+    date_only.write_text(head + FRAMES)
+    for path, start in ((with_trigger, 1506809173.191), (date_only, 1506783973.191)):
+        got, report = read(path)
+        assert got.timestamp_s.tolist() == [start + 1.0, start + 2.5]
+        with can.ASCReader(str(path), relative_timestamp=False) as r:
+            assert got.equals(from_messages(list(r), got.position, "line"))
+        assert report.warnings == [] and report.n_rejected == 0
+
+
+@pytest.mark.parametrize(("frac", "ms", "late"), [(0.062, 62, 0.558), (0.008, 8, 0.792),
+                                                  (0.0, 0, 0.0), (0.1, 100, 0.0)])
+def test_ascwriter_milliseconds_without_leading_zeros(tmp_path: Path, tz, frac: float, ms: int,
+                                                     late: float) -> None:
+    """python-can 4.6.1's ASCWriter writes ``.62`` for 62 ms; python-can reads 620 ms.
+
+    rigtools reads what python-can reads, and warns when the digits are ambiguous.
+    """
+    tz("UTC")
+    t0 = 1_700_000_000.0 + frac + 0.0004  # .0004: within the millisecond, truncated
+    path = write_asc(tmp_path / "ms.asc", [msg(t0, 0x100, b"\x01"), msg(t0 + 1.0, 0x101)])
+    assert f"Begin Triggerblock Tue Nov 14 22:13:20.{ms} 2023" in path.read_text()
+    got, report = read(path)
+    with can.ASCReader(str(path), relative_timestamp=False) as r:
+        assert got.equals(from_messages(list(r), got.position, "line"))
+    np.testing.assert_allclose(got.timestamp_s - (np.array([t0, t0 + 1.0]) - 0.0004),
+                               late, rtol=0, atol=1e-6)
+    warned = [w for w in report.warnings if "the start date" in w]
+    if 0 < ms < 100:
+        assert warned == [
+            f"{path}: the start date (line 4) has {len(str(ms))} digit(s) after the seconds "
+            f"('.{ms}'), read as 0.{ms} s as python-can reads it; python-can's ASCWriter writes "
+            "milliseconds without leading zeros ('.62' for 62 ms), so the absolute times may "
+            "be up to 0.9 s late"]
+    else:
+        assert warned == []
+
+
+def test_dates_are_read_in_local_time(tmp_path: Path, tz) -> None:
+    """The date carries no zone; python-can (and rigtools) read it in the local time zone."""
+    path = tmp_path / "local.asc"
+    path.write_text("date Sat Sep 30 15:06:13.191 2017\nbase hex  timestamps absolute\n"
+                    "internal events logged\n" + FRAMES)
+    tz("UTC")
+    utc, _ = read(path)
+    tz("ZZZ-02")  # POSIX TZ: two hours east of UTC, no daylight saving
+    east, report = read(path)
+    with can.ASCReader(str(path), relative_timestamp=False) as r:
+        assert east.equals(from_messages(list(r), east.position, "line"))
+    np.testing.assert_array_equal(utc.timestamp_s - east.timestamp_s, 7200.0)
+    assert report.warnings == []
+
+
+# Dates python-can's ASCReader matches as dates but cannot parse (its month names are English
+# and a few German ones, its formats "%m %d %H:%M:%S.%f %Y" and the AM/PM ones).
+BAD_DATES = ["Sat Sep 30 15:06:13,191 2017",   # comma before the milliseconds
+             "sáb sep 30 15:06:13.191 2017",   # Spanish: lower-case month
+             "土 9月 30 15:06:13.191 2017",     # Japanese
+             "Sat 30.09.2017 15:06:13.191"]    # day first, numeric month
+
+
+@pytest.mark.parametrize("date", BAD_DATES)
+def test_unparsable_date_falls_back_to_relative_times(tmp_path: Path, date: str) -> None:
+    """python-can raises and loses the whole file; rigtools falls back to relative times.
+
+    Every frame is kept, times as python-can's relative_timestamp=True gives them, and one
+    warning says so.
+    """
+    path = tmp_path / "locale.asc"
+    path.write_text(f"date {date}\nbase hex  timestamps absolute\ninternal events logged\n"
+                    f"Begin Triggerblock {date}\n" + FRAMES + "End TriggerBlock\n",
+                    encoding="utf-8")
+    with can.ASCReader(str(path), relative_timestamp=False) as r, \
+            pytest.raises(ValueError, match="Incompatible datetime string") as raised:
+        list(r)
+    got, report = read(path)
+    assert got.timestamp_s.tolist() == [1.0, 2.5]
+    assert got.position.tolist() == [6, 7]
+    with can.ASCReader(str(path), relative_timestamp=True) as r:
+        assert got.equals(from_messages(list(r), got.position, "line"))
+    assert report.n_rejected == 0
+    assert report.warnings == [
+        f"{path}: python-can cannot parse the date of line 1 ('date {date}': ValueError: "
+        f"{raised.value}); timestamps from there on are relative to the measurement start "
+        "(s), not UNIX times"
+    ]
+
+
+def test_unparsable_trigger_date_after_a_good_date_line(tmp_path: Path) -> None:
+    """The trigger-block date would replace the header's: relative from there on."""
+    path = tmp_path / "trigger_locale.asc"
+    path.write_text("date Sat Sep 30 15:06:13.191 2017\nbase hex  timestamps absolute\n"
+                    "internal events logged\n// comment\n"
+                    "Begin Triggerblock sáb sep 30 15:06:13.191 2017\n" + FRAMES
+                    + "End TriggerBlock\n", encoding="utf-8")
+    got, report = read(path)
+    assert got.timestamp_s.tolist() == [1.0, 2.5]
+    assert report.n_rejected == 0
+    assert len(report.warnings) == 1
+    assert report.warnings[0].startswith(
+        f"{path}: python-can cannot parse the date of line 5 ('Begin Triggerblock sáb sep 30 "
+        "15:06:13.191 2017': ValueError: Incompatible datetime string sep 30")
+
+
+@pytest.mark.parametrize("header", ["base hex  timestamps absolute\n",
+                                    "// no date\nbase hex  timestamps absolute\n"
+                                    "internal events logged\nBegin Triggerblock\n"],
+                         ids=["no-date-line", "trigger-without-date"])
+def test_no_date_reads_relative_times_with_a_warning(tmp_path: Path, header: str) -> None:
+    path = tmp_path / "undated.asc"
+    path.write_text(header + FRAMES + ("End TriggerBlock\n" if "Trigger" in header else ""))
+    got, report = read(path)
+    assert got.timestamp_s.tolist() == [1.0, 2.5]
+    with can.ASCReader(str(path), relative_timestamp=False) as r:
+        assert list(r)[-1].timestamp == 2.5  # python-can: start 0.0, silently
+    assert report.n_rejected == 0
+    assert report.warnings == [f"{path}: no 'date' or 'Begin Triggerblock' line with a date; "
+                               "timestamps are relative to the measurement start (s), not "
+                               "UNIX times"]
+
+
+def test_date_line_python_can_does_not_recognise(tmp_path: Path) -> None:
+    """``date sam. sept. ...`` is no date line for python-can (``date <word> <rest>``).
+
+    It is counted unparsable_line and the times are relative.
+    """
+    path = tmp_path / "french.asc"
+    path.write_text("date sam. sept. 30 15:06:13.191 2017\nbase hex  timestamps absolute\n"
+                    "internal events logged\n" + FRAMES)
+    got, report = read(path)
+    assert got.timestamp_s.tolist() == [1.0, 2.5]
+    assert report.rejected == {"unparsable_line": 1}
+    assert report.first_position == {"unparsable_line": "line 1"}
+    assert any("no 'date' or 'Begin Triggerblock' line with a date" in w
+               for w in report.warnings)
+
+
+@pytest.mark.parametrize("date", ["Sat Sep 30 15:06:13.191 2017", BAD_DATES[0]],
+                         ids=["good-date", "bad-date"])
+def test_restart_after_a_python_can_error_keeps_the_time_base(tmp_path: Path, tz,
+                                                            date: str) -> None:
+    """python-can raising mid-file is restarted with the header replayed.
+
+    The frames after the bad line keep the start time (absolute), or stay relative after a
+    bad date.
+    """
+    tz("UTC")
+    path = tmp_path / "restart.asc"
+    bad = "   1.800000 1  123  Rx   d 8 0G 00 00 00 00 00 00 00\n"
+    path.write_text(f"date {date}\nbase hex  timestamps absolute\ninternal events logged\n"
+                    f"Begin Triggerblock {date}\n"
+                    + FRAMES.replace("   2.500000", bad + "   2.500000") + "End TriggerBlock\n")
+    got, report = read(path)
+    start = 1506783973.191 if "2017" in date and "," not in date else 0.0
+    assert got.timestamp_s.tolist() == [start + 1.0, start + 2.5]
+    assert report.rejected == {"unparsable_line": 1}
+    assert report.first_position == {"unparsable_line": "line 7"}
+    assert any("python-can raised on 1 line(s)" in w for w in report.warnings)
+    assert len(report.warnings) == (1 if start else 2)
 
 
 # --- error and remote frames -----------------------------------------------------------------

@@ -79,13 +79,61 @@ def test_every_format_reads_back_the_quantised_input_exactly(tmp_path, source, f
     np.testing.assert_array_equal(rec.slow["Torque_Nm"].values, [302.0] * 4)
     np.testing.assert_array_equal(rec.slow["OilTemp_C"].values, [90.5] * 4)
     assert rec.slow["Torque_Nm"].unit == "N.m"
-    # slow frames every 0.1 s (jitter below 20 µs, format resolution 1 µs or better); ASC
-    # keeps times relative to its start, the others absolute
+    # slow frames every 0.1 s (jitter below 20 µs, format resolution 1 µs or better), at
+    # absolute times in every format; ASCWriter's start (its trigger-block date) is the first
+    # frame's time truncated to the millisecond, so ASC times may be up to 1 ms early
     t = rec.slow["PinionSpeed_rpm"].time_s
     np.testing.assert_allclose(np.diff(t), 0.1, atol=30e-6)
-    if fmt != "asc":
-        assert abs(t[0] - (START + LATENCY)) < 30e-6
+    early = 1e-3 if fmt == "asc" else 0.0
+    assert -early - 30e-6 < t[0] - (START + LATENCY) < 30e-6
     assert rec.provenance.reader == ("candump" if fmt == "log" else fmt)
+
+
+def _shifted(frames: CanFrameBatch, shift_s: float) -> CanFrameBatch:
+    return CanFrameBatch(frames.timestamp_s + shift_s, frames.arbitration_id, frames.is_extended,
+                         frames.is_fd, frames.length, frames.data, frames.channel,
+                         frames.position, frames.position_unit)
+
+
+@pytest.mark.parametrize("start", ["as-encoded", "sub-ms", "ms-aligned"])
+def test_asc_and_blf_of_the_same_frames_agree_in_absolute_time(tmp_path, source, start):
+    """python-can's ASCWriter and BLFWriter, the same frames, read through ``read``.
+
+    ASC text precision: the start (``Begin Triggerblock`` date) has milliseconds, which
+    ASCWriter truncates from the first frame's time, and each line's offset from the first
+    frame 6 decimals (1 µs). BLFWriter stores the start truncated to the millisecond too but
+    offsets from it in ns, so BLF times are the frames' own. Hence ASC times are BLF times
+    minus one constant ``delta`` = the first frame's time past its millisecond, in [0, 1 ms),
+    each within 0.5 µs; channel start times (median of stamp - index / fs) and slow-signal
+    times alike. With a first frame on a millisecond they agree within 1 µs.
+    """
+    _, frames, want = source
+    t_first = float(frames.timestamp_s[0])  # START + 0.257 ms
+    past_ms = (t_first - START) % 1e-3  # START is a whole second
+    shift = {"as-encoded": 0.0, "sub-ms": 0.1234567, "ms-aligned": -past_ms}[start]
+    # (not 1..99 ms past the second: python-can's ASCWriter writes those milliseconds
+    # without leading zeros, test_asc.py::test_ascwriter_milliseconds_without_leading_zeros)
+    frames = _shifted(frames, shift)
+    t_first = float(frames.timestamp_s[0])
+    delta = (t_first - START) % 1e-3
+    assert (start == "ms-aligned") == (delta < 1e-6 or delta > 1e-3 - 1e-6)
+    delta = 0.0 if start == "ms-aligned" else delta
+    asc = read(write_can_log(tmp_path / "run.asc", frames, "asc", engine="python-can"))
+    blf = read(write_can_log(tmp_path / "run.blf", frames, "blf", engine="python-can"))
+    assert asc.report.warnings == [] and blf.report.warnings == []
+    _check_channels(asc, want)
+    _check_channels(blf, want)
+    for name in want:
+        a, b = asc.channels[name].start_time_s, blf.channels[name].start_time_s
+        assert abs(b - a - delta) <= 1e-6, name
+        assert -1e-6 <= b - a < 1e-3 + 1e-6, name  # the ASC text precision
+    for name, sig in blf.slow.items():
+        # BLF: the frames' own times (ns offsets from a millisecond start)
+        nearest = np.min(np.abs(frames.timestamp_s[:, None] - sig.time_s[None, :]), axis=0)
+        assert np.all(nearest <= 2 * np.spacing(START)), name
+        np.testing.assert_allclose(sig.time_s - asc.slow[name].time_s, delta, rtol=0,
+                                   atol=0.5e-6 + 2 * np.spacing(START), err_msg=name)
+        np.testing.assert_array_equal(sig.values, asc.slow[name].values, err_msg=name)
 
 
 def test_quantisation_rounds_clips_and_matches_the_dbc_scale(source):

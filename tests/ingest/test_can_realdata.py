@@ -2,8 +2,9 @@
 
 * python-can logs (``realdata/python-can``): every ASC, gzipped ASC and TRC file is detected
   by content, unwrapped and read; the frames and the error/remote tallies equal what
-  python-can's ``LogReader`` yields; the files holding the same frames agree across formats;
-  CAN FD payloads keep their 64 bytes.
+  python-can's ``LogReader`` yields, configured as rigtools reads (ASC with absolute times,
+  ``relative_timestamp=False``); the files holding the same frames agree across formats,
+  absolute times included; CAN FD payloads keep their 64 bytes.
 * cantools DBCs (``realdata/cantools-dbc``): every file loads with ``load_dbc`` (strict) or
   raises ``DbcError`` naming the file; every signal of every message decodes with
   ``decode_signal`` exactly as cantools' ``decode_message`` over a few hundred seeded random
@@ -16,6 +17,10 @@ it is absent. Files are read in place, never copied.
 
 from __future__ import annotations
 
+import gzip
+import time
+from collections.abc import Callable, Iterator
+from datetime import UTC, datetime
 from pathlib import Path
 
 import can
@@ -57,8 +62,20 @@ def read(path: Path, fmt: str) -> tuple[CanFrameBatch, IngestReport]:
 
 
 def python_can(path: Path) -> tuple[list[can.Message], int, int]:
-    """Data frames, error-frame count and remote-frame count as python-can's LogReader gives."""
-    with can.LogReader(str(path)) as r:
+    """Data frames, error-frame count and remote-frame count as python-can's LogReader gives.
+
+    ASC files are read as rigtools reads them, with absolute times (``relative_timestamp=
+    False``; TRCReader takes no such option and ignores it). python-can 4.6.1's LogReader
+    drops its keyword arguments for gzipped files (``_decompress(filename)``), so a ``.asc.gz``
+    is opened here and handed to ASCReader directly.
+    """
+    name = path.name.lower()
+    kwargs = {"relative_timestamp": False} if ".asc" in name else {}
+    if name.endswith(".asc.gz"):
+        reader = can.ASCReader(gzip.open(path, "rt"), **kwargs)
+    else:
+        reader = can.LogReader(str(path), **kwargs)
+    with reader as r:
         messages = list(r)
     data = [m for m in messages if not m.is_error_frame and not m.is_remote_frame]
     n_err = sum(m.is_error_frame for m in messages)
@@ -118,29 +135,77 @@ def test_logged_events_are_reported_not_rejected() -> None:
     assert len(got) == 12
 
 
+@pytest.fixture
+def tz(monkeypatch: pytest.MonkeyPatch) -> Iterator[Callable[[str], None]]:
+    """Set the process time zone (python-can reads ASC dates in local time); restored after."""
+
+    def set_tz(name: str) -> None:
+        monkeypatch.setenv("TZ", name)
+        time.tzset()
+
+    yield set_tz
+    monkeypatch.undo()
+    time.tzset()
+
+
 @needs_pycan
-def test_same_frames_across_asc_gz_and_trc() -> None:
+def test_asc_times_are_absolute_from_the_trigger_block_date(tz) -> None:
+    """Every real ASC carries a date python-can parses (the "us_locale" one too).
+
+    So the times are absolute, with no warning about dates.
+    """
+    tz("UTC")
+    start = datetime(2017, 9, 30, 15, 6, 13, 191000, tzinfo=UTC).timestamp()
+    for name in ("single_frame.asc", "single_frame_us_locale.asc"):
+        got, report = read(PYCAN / name, "asc")
+        assert got.timestamp_s.tolist() == [start], name  # "Begin Triggerblock ... 15:06:13.191"
+        assert not any("date" in w for w in report.warnings), report.warnings
+    for path in LOGS:
+        if path.name.endswith(".trc"):
+            continue
+        got, report = read(path, "asc")
+        assert np.all(got.timestamp_s > 1.4e9), path.name  # 2014 onwards
+        assert not any("date" in w for w in report.warnings), (path.name, report.warnings)
+
+
+@needs_pycan
+def test_same_frames_across_asc_gz_and_trc(tz) -> None:
     asc_path = PYCAN / "test_CanMessage.asc"
     gz_path = PYCAN / "test_CanMessage.asc.gz"
     trc_path = PYCAN / "test_CanMessage.trc"
     assert [reg.detect_format(p) for p in (asc_path, gz_path, trc_path)] == ["asc", "asc", "trc"]
-    a, _ = read(asc_path, "asc")
+    # Both formats carry the start: the ASC its "Begin Triggerblock Sat Sep 30 10:06:13.191 PM
+    # 2017" (which wins over its "date Sam Sep 30 15:06:13.191 2017" header line), the TRC
+    # ";$STARTTIME=43008.920986006946" (days since 1899-12-30, 22:06:13.191). python-can reads
+    # the ASC date in local time but the TRC start as UTC (TRCReader: datetime(1899, 12, 30,
+    # tzinfo=UTC) + days), so the two agree only in a UTC process: pinned here.
+    tz("UTC")
+    a, report = read(asc_path, "asc")
     g, _ = read(gz_path, "asc")
     t, _ = read(trc_path, "trc")
+    assert report.warnings == []
     assert a.equals(g, compare_position=True)  # gzip changes nothing
     np.testing.assert_array_equal(a.channel, g.channel)
-    # ASC times are relative to the measurement start, the TRC's absolute (;$STARTTIME):
-    # compare ids, flags, payloads exactly and times relative to the first frame, within
-    # 1 µs (ASC has µs, TRC 3 decimals of ms)
+    # ids, flags, payloads exactly; absolute times within 1 µs (ASC has µs, TRC 3 decimals of
+    # ms), and both exactly python-can's arithmetic (start + offset)
     assert len(a) == len(t) == 2
     for field in ("arbitration_id", "is_extended", "is_fd", "length"):
         np.testing.assert_array_equal(getattr(a, field), getattr(t, field), err_msg=field)
     np.testing.assert_array_equal(a.data[:, :8], t.data[:, :8])
-    np.testing.assert_allclose(a.timestamp_s - a.timestamp_s[0], t.timestamp_s - t.timestamp_s[0],
-                               rtol=0, atol=1e-6)
-    assert a.timestamp_s.tolist() == [2.501, 17.876708]
+    np.testing.assert_allclose(a.timestamp_s, t.timestamp_s, rtol=0, atol=1e-6)
+    start = datetime(2017, 9, 30, 22, 6, 13, 191000, tzinfo=UTC).timestamp()
+    assert a.timestamp_s.tolist() == [start + 2.501, start + 17.876708]
     # python-can numbers ASC channels from 0 (file channel - 1) but TRC ones as written
     np.testing.assert_array_equal(a.channel + 1, t.channel)
+    # In any other zone the ASC moves and the TRC does not; times relative to the first
+    # frame still agree (the comparison that holds whatever the reading machine's zone).
+    tz("ZZZ-02")  # POSIX TZ: two hours east of UTC
+    a2, _ = read(asc_path, "asc")
+    t2, _ = read(trc_path, "trc")
+    np.testing.assert_array_equal(a.timestamp_s - a2.timestamp_s, 7200.0)
+    assert t2.equals(t)
+    np.testing.assert_allclose(a2.timestamp_s - a2.timestamp_s[0],
+                               t2.timestamp_s - t2.timestamp_s[0], rtol=0, atol=1e-6)
 
 
 @needs_pycan
