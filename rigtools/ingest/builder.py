@@ -303,7 +303,9 @@ class RecordingBuilder:
             for b in blocks
         )
         parts.blocks = []
-        if may_be_nonfinite:
+        # One cheap reduction first: a sum over finite values is finite (an overflowing sum
+        # merely falls back to the full pass).
+        if may_be_nonfinite and not (complete and np.isfinite(np.add.reduce(values))):
             nonfinite = valid & ~np.isfinite(values)
             n_nonfinite = int(nonfinite.sum())
             if n_nonfinite:

@@ -56,7 +56,6 @@ from rigtools.ingest.mcap_container import (
     MAX_RECORD_BYTES,
     ContainerScanner,
     RawMessage,
-    ScannedMessage,
     iter_messages,
 )
 from rigtools.ingest.mcap_decoders import (
@@ -237,21 +236,14 @@ def ingest(
     source = (mapping.source or "<mapping>") if mapping is not None else "<mapping>"
     ctx = HandlerContext(path, builder, report, source)
     handlers: dict[int, ChannelHandler] = {}
-    for where, buf, msgs in scanner.blocks():
-        groups: dict[int, list[ScannedMessage]] = {}
-        for m in msgs:
-            g = groups.get(m[0])
-            if g is None:
-                groups[m[0]] = [m]
-            else:
-                g.append(m)
-        for cid, group in groups.items():
+    for block in scanner.blocks():
+        for cid, group in block.by_channel():
             h = handlers.get(cid)
             if h is None:
                 ch = scanner.channels[cid]
                 schema = scanner.schemas.get(ch.schema_id) if ch.schema_id else None
                 h = handlers[cid] = _handler_for(ctx, ch, schema, by_topic)
-            h.add(group, where, buf)
+            h.add(group)
     for h in handlers.values():
         h.finish()
     seen = {ch.topic for ch in scanner.channels.values()}

@@ -8,9 +8,25 @@ output and checked against their CRC (:mod:`rigtools.ingest.mcap_decompress`). N
 depends on the summary section, so files without a summary or indexes, and files cut short,
 are read as far as they are intact.
 
-:class:`ContainerScanner` hands on messages a block at a time (one block per chunk, with the
-chunk's uncompressed data as a common buffer), which lets payload decoders work on a whole
-chunk at once. :func:`iter_messages` is the same walk one :class:`RawMessage` at a time.
+:class:`ContainerScanner` hands on messages a :class:`MessageBlock` at a time (one block per
+chunk, with the chunk's uncompressed data as a common buffer and the message header fields as
+columns), which lets payload decoders work on a whole chunk at once. :func:`iter_messages` is
+the same walk one :class:`RawMessage` at a time.
+
+Two things make the walk fast without changing what it finds:
+
+* Inside a chunk, a run of Message records of one length is read with array operations: the
+  walk guesses that the next records lie at equal strides, reads opcode and length at each
+  guessed offset, and takes the run up to the first record that is not a Message of that
+  length (each record's own length vouches for where the next one starts, so the guess is
+  checked record by record). Anything else is walked one record at a time.
+* When the stream can be read at a position without moving (a regular file, a ``BytesIO``),
+  the next chunk is read, decompressed and CRC-checked in a worker thread while the records of
+  the current one are parsed (decompression and CRC release the GIL; when the worker is the
+  slower side, the walk checks the CRC itself). At most two chunks are in flight. The worker
+  only computes; the walk applies every outcome (refusal, tally, warning) at the same point
+  and in the same order as when it reads the chunk itself.
+
 Every loss is counted in the :class:`~rigtools.ingest.recording.IngestReport`; the reasons
 are listed in :mod:`rigtools.ingest.mcap`.
 
@@ -22,8 +38,12 @@ end of the file if the summary's repeated Channel records define it.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterator
+from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any, BinaryIO, Final, NamedTuple, TypeAlias, TypeVar
+
+import numpy as np
 
 from rigtools.errors import RecordingFormatError
 from rigtools.ingest.mcap_decompress import (
@@ -66,6 +86,7 @@ __all__ = [
     "DIRECT_BLOCK_MESSAGES",
     "MAX_DEFERRED_BYTES",
     "MAX_RECORD_BYTES",
+    "PIPELINE_MIN_CHUNK_BYTES",
     "ContainerScanner",
     "MessageBlock",
     "RawMessage",
@@ -80,14 +101,158 @@ MAX_RECORD_BYTES: Final = 2 << 30
 MAX_DEFERRED_BYTES: Final = 64 << 20
 #: Messages found directly in the data section (outside chunks) go on in blocks of this many.
 DIRECT_BLOCK_MESSAGES: Final = 4096
+#: Chunk records at least this long (64 KiB) are read and decompressed one chunk ahead in a
+#: worker thread when the stream allows it; smaller ones cost less than the hand-over.
+PIPELINE_MIN_CHUNK_BYTES = 64 << 10
 _MAX_WARNINGS_PER_REASON: Final = 5
+#: A run of equal Message records is read with array operations when it has at least this many.
+_RUN_MIN: Final = 8
+#: The first guess checks this many records; each further one eight times more.
+_RUN_PROBE: Final = 16
+#: After a guess that did not pay, this many records are walked one by one before the next.
+_RUN_BACKOFF: Final = 8
+#: How many top-level records the look-ahead for the next chunk steps over at most.
+_LOOKAHEAD_RECORDS: Final = 64
 
-#: A message as the scanner hands it on: (channel_id, sequence, log_time (ns), publish_time
-#: (ns), payload, offset of the payload in its block's buffer, or -1 when the block has no
-#: common buffer). A plain tuple: the scanner makes one per message.
+#: A message as :meth:`MessageBlock.messages` hands it on: (channel_id, sequence, log_time
+#: (ns), publish_time (ns), payload, offset of the payload in its block's buffer, or -1 when
+#: the block has no common buffer).
 ScannedMessage: TypeAlias = tuple[int, int, int, int, memoryview, int]
-#: One block of messages: (where it was found, common buffer or None, messages).
-MessageBlock: TypeAlias = tuple[str, Any, list[ScannedMessage]]
+
+
+class MessageBlock:
+    """Messages found together (one chunk, or a stretch of the data section), as columns.
+
+    Attributes
+    ----------
+    where : str
+        Where the block was found, for tallies (``"byte 1234"``).
+    buf : memoryview or None
+        The common buffer of a chunk block (its uncompressed records); None otherwise.
+    channel_id, sequence : numpy.ndarray
+        int64, one per message, in file order.
+    log_time, publish_time : numpy.ndarray
+        uint64 (ns).
+    start, end : numpy.ndarray or None
+        int64 byte range of each payload in ``buf`` (None when ``buf`` is None).
+    """
+
+    __slots__ = ("_payloads", "buf", "channel_id", "end", "log_time", "publish_time",
+                 "sequence", "start", "where")
+
+    def __init__(self, where: str, buf: Any, channel_id: np.ndarray, sequence: np.ndarray,
+                 log_time: np.ndarray, publish_time: np.ndarray, start: np.ndarray | None,
+                 end: np.ndarray | None, payloads: list[Any] | None = None) -> None:
+        self.where = where
+        self.buf = buf
+        self.channel_id = channel_id
+        self.sequence = sequence
+        self.log_time = log_time
+        self.publish_time = publish_time
+        self.start = start
+        self.end = end
+        self._payloads = payloads
+
+    @classmethod
+    def from_messages(cls, where: str, msgs: list[ScannedMessage]) -> MessageBlock:
+        """A block without a common buffer, from message tuples (payloads kept as given)."""
+        return cls(where, None,
+                   np.fromiter((m[0] for m in msgs), np.int64, len(msgs)),
+                   np.fromiter((m[1] for m in msgs), np.int64, len(msgs)),
+                   np.fromiter((m[2] for m in msgs), np.uint64, len(msgs)),
+                   np.fromiter((m[3] for m in msgs), np.uint64, len(msgs)),
+                   None, None, [m[4] for m in msgs])
+
+    def __len__(self) -> int:
+        return int(self.channel_id.shape[0])
+
+    def messages(self) -> list[ScannedMessage]:
+        """The messages as tuples, in file order (payloads are views into ``buf``)."""
+        cols = (self.channel_id.tolist(), self.sequence.tolist(), self.log_time.tolist(),
+                self.publish_time.tolist())
+        if self.buf is None or self.start is None or self.end is None:
+            payloads = self._payloads or []
+            return [(c, s, lt, pt, p, -1) for c, s, lt, pt, p in zip(*cols, payloads,
+                                                                       strict=True)]
+        buf = self.buf
+        return [(c, s, lt, pt, buf[a:b], a) for c, s, lt, pt, a, b in
+                zip(*cols, self.start.tolist(), self.end.tolist(), strict=True)]
+
+    def take(self, idx: np.ndarray | slice) -> MessageBlock:
+        """The messages at positions ``idx`` (ascending, or a slice): a block of the same buffer."""
+        if self._payloads is None:
+            payloads = None
+        elif isinstance(idx, slice):
+            payloads = self._payloads[idx]
+        else:
+            payloads = [self._payloads[i] for i in idx.tolist()]
+        return MessageBlock(self.where, self.buf, self.channel_id[idx], self.sequence[idx],
+                            self.log_time[idx], self.publish_time[idx],
+                            None if self.start is None else self.start[idx],
+                            None if self.end is None else self.end[idx], payloads)
+
+    def by_channel(self) -> list[tuple[int, MessageBlock]]:
+        """The block split by channel id, channels in order of first appearance."""
+        cids = self.channel_id
+        n = cids.shape[0]
+        order = list(dict.fromkeys(cids.tolist()))
+        p = len(order)
+        if p <= 1:
+            return [(order[0], self)] if order else []
+        if (cids[p:] == cids[: n - p]).all():
+            # channels taking turns (one logger's interleaved channels): strided views
+            return [(c, self.take(slice(j, None, p))) for j, c in enumerate(order)]
+        return [(c, self.take(np.flatnonzero(cids == c))) for c in order]
+
+
+@functools.lru_cache(maxsize=64)
+def _run_dtype(stride: int) -> np.dtype:
+    """Record header and message header fields of Message records ``stride`` bytes apart."""
+    return np.dtype({"names": ["op", "len", "cid", "seq", "lt", "pt"],
+                     "formats": ["u1", "<u8", "<u2", "<u4", "<u8", "<u8"],
+                     "offsets": [0, 1, 9, 11, 15, 23], "itemsize": stride})
+
+
+#: The outcome of a chunk record's content: its uncompressed records (None when it has none
+#: or is refused), the refusal (reason, detail) if any, and the CRC still to check (None when
+#: checked or not to be checked).
+_ChunkOutcome: TypeAlias = tuple[Any, tuple[str, str] | None, int | None]
+
+
+def _chunk_outcome(content: Any, decompressor: ChunkDecompressor, validate_crcs: bool,
+                   check_crc: bool = True) -> _ChunkOutcome:
+    """Header, size limits, decompression and (unless ``check_crc`` is False) CRC of a chunk.
+
+    No side effects: runs in the walk or, one chunk ahead, in the worker thread. A CRC left
+    unchecked is handed back, for the walk to check before it uses the records.
+    """
+    try:
+        head = parse_chunk_header(content)
+    except MalformedRecordError as exc:
+        return None, ("bad_chunk", str(exc)), None
+    try:
+        check_chunk_size(head.uncompressed_size, head.records_size)
+        if head.uncompressed_size == 0:
+            return None, None, None
+        off = head.records_offset
+        data = decompressor.decompress(
+            head.compression, memoryview(content)[off : off + head.records_size],
+            head.uncompressed_size)
+        crc = head.uncompressed_crc if validate_crcs and head.uncompressed_crc != 0 else None
+        if crc is not None and check_crc:
+            check_chunk_crc(data, crc)
+            crc = None
+    except ChunkRefusedError as exc:
+        return None, (exc.reason, exc.detail), None
+    return data, None, crc
+
+
+def _columns(one: tuple[list[int], ...]) -> tuple[np.ndarray, ...]:
+    """Message columns from lists (cid, seq, log time, publish time, payload start, end)."""
+    cid, seq, lt, pt, a, b = one
+    return (np.array(cid, np.int64), np.array(seq, np.int64), np.array(lt, np.uint64),
+            np.array(pt, np.uint64), np.array(a, np.int64), np.array(b, np.int64))
+
 
 _Record = TypeVar("_Record", SchemaRecord, ChannelRecord)
 
@@ -165,6 +330,11 @@ class ContainerScanner:
         self._warned: dict[str, int] = {}
         self._deferred: list[tuple[ScannedMessage, str]] = []
         self._deferred_bytes = 0
+        # the chunk read ahead: (position, record length, outcome in the worker)
+        self._ahead: tuple[int, int, Future[_ChunkOutcome | None]] | None = None
+        self._worker: ThreadPoolExecutor | None = None
+        self._worker_decompressor = ChunkDecompressor()
+        self._worker_crc = True
 
     # -- accounting ----------------------------------------------------------------------
 
@@ -232,37 +402,34 @@ class ContainerScanner:
 
     # -- chunks --------------------------------------------------------------------------
 
-    def _chunk(self, content: bytes, pos: int) -> tuple[memoryview | None, list[ScannedMessage]]:
-        try:
-            head = parse_chunk_header(content)
-        except MalformedRecordError as exc:
-            self._refuse_chunk("bad_chunk", pos, str(exc))
-            return None, []
-        try:
-            check_chunk_size(head.uncompressed_size, head.records_size)
-            if head.uncompressed_size == 0:
-                return None, []
-            off = head.records_offset
-            data = self._decompressor.decompress(
-                head.compression, memoryview(content)[off : off + head.records_size],
-                head.uncompressed_size)
-            if self.validate_crcs and head.uncompressed_crc != 0:
-                check_chunk_crc(data, head.uncompressed_crc)
-        except ChunkRefusedError as exc:
-            self._refuse_chunk(exc.reason, pos, exc.detail)
-            return None, []
+    def _chunk(self, outcome: _ChunkOutcome, pos: int) -> MessageBlock | None:
+        """Apply a chunk's outcome: count a refusal, or walk its records."""
+        data, refusal, crc = outcome
+        if crc is not None:
+            try:
+                check_chunk_crc(data, crc)
+            except ChunkRefusedError as exc:
+                refusal, data = (exc.reason, exc.detail), None
+        if refusal is not None:
+            self._refuse_chunk(refusal[0], pos, refusal[1])
+            return None
+        if data is None:
+            return None
         buf = memoryview(data)
-        return buf, self._chunk_records(buf, pos)
+        return self._chunk_records(buf, pos)
 
-    def _chunk_records(self, buf: memoryview, cpos: int) -> list[ScannedMessage]:
-        out: list[ScannedMessage] = []
-        append = out.append
+    def _chunk_records(self, buf: memoryview, cpos: int) -> MessageBlock | None:
+        """The messages of a chunk's uncompressed records, as one block (None when none)."""
         channels = self.channels
         unpack_hdr, unpack_msg = RECORD_HEADER.unpack_from, MESSAGE_HEADER.unpack_from
         hsize, msize = RECORD_HEADER_BYTES, MESSAGE_HEADER_BYTES
         n = len(buf)
         pos = 0
         n_msg = 0
+        cols: list[tuple[np.ndarray, ...]] = []
+        # messages found one by one, since the last run: cid, seq, lt, pt, payload start, end
+        one: tuple[list[int], ...] = ([], [], [], [], [], [])
+        quiet = 0
         while pos < n:
             if n - pos < hsize:
                 self._bad_in_chunk(cpos, pos, f"{n - pos} stray bytes at the end")
@@ -274,13 +441,31 @@ class ContainerScanner:
                 break
             stop = body + length
             if op == OP_MESSAGE:
+                if quiet:
+                    quiet -= 1
+                elif length >= msize and n - stop >= (_RUN_MIN - 1) * (stop - pos):
+                    k = self._run_length(buf, pos, stop - pos, length)
+                    if k >= _RUN_MIN:
+                        if one[0]:
+                            cols.append(_columns(one))
+                            one = ([], [], [], [], [], [])
+                        self._take_run(buf, cpos, pos, stop - pos, k, cols)
+                        n_msg += k
+                        pos += k * (stop - pos)
+                        continue
+                    quiet = _RUN_BACKOFF
                 n_msg += 1
                 if length < msize:
                     self.report.reject("bad_record", 1, f"chunk at byte {cpos} +{pos}")
                 else:
                     cid, seq, lt, pt = unpack_msg(buf, body)
                     if cid in channels:
-                        append((cid, seq, lt, pt, buf[body + msize : stop], body + msize))
+                        one[0].append(cid)
+                        one[1].append(seq)
+                        one[2].append(lt)
+                        one[3].append(pt)
+                        one[4].append(body + msize)
+                        one[5].append(stop)
                     else:
                         self._defer(cid, seq, lt, pt, buf[body + msize : stop],
                                     f"chunk at byte {cpos} +{pos}")
@@ -290,7 +475,62 @@ class ContainerScanner:
                 self._channel(buf, body, stop, f"chunk at byte {cpos} +{pos}")
             pos = stop
         self.n_message_records += n_msg
-        return out
+        if one[0]:
+            cols.append(_columns(one))
+        if not cols:
+            return None
+        if len(cols) == 1:
+            c = cols[0]
+        else:
+            c = tuple(np.concatenate(parts) for parts in zip(*cols, strict=True))
+        cid, seq, lt, pt, start, end = c
+        return MessageBlock(f"byte {cpos}", buf, cid, seq, lt, pt, start, end)
+
+    @staticmethod
+    def _run_length(buf: memoryview, pos: int, stride: int, length: int) -> int:
+        """How many Message records of content ``length`` follow each other from ``pos``.
+
+        The record at ``pos`` is one. Records are checked in windows growing eightfold, so a
+        wrong guess costs a few records' worth of work.
+        """
+        count = (len(buf) - pos) // stride
+        dt = _run_dtype(stride)
+        k, w = 0, _RUN_PROBE
+        while k < count:
+            m = min(w, count - k)
+            recs = np.frombuffer(buf, dt, m, pos + k * stride)
+            ok = (recs["op"] == OP_MESSAGE) & (recs["len"] == length)
+            if not ok.all():
+                return k + int(ok.argmin())
+            k += m
+            w *= 8
+        return k
+
+    def _take_run(self, buf: memoryview, cpos: int, pos: int, stride: int, k: int,
+                  cols: list[tuple[np.ndarray, ...]]) -> None:
+        """Columns of ``k`` Message records ``stride`` bytes apart from ``pos`` (checked)."""
+        recs = np.frombuffer(buf, _run_dtype(stride), k, pos)
+        cid = recs["cid"].astype(np.int64)
+        seq = recs["seq"].astype(np.int64)
+        lt = recs["lt"].astype(np.uint64)
+        pt = recs["pt"].astype(np.uint64)
+        start = np.arange(k, dtype=np.int64)
+        start *= stride
+        start += pos + RECORD_HEADER_BYTES + MESSAGE_HEADER_BYTES
+        end = start + (stride - RECORD_HEADER_BYTES - MESSAGE_HEADER_BYTES)
+        unknown = [c for c in np.unique(cid).tolist() if c not in self.channels]
+        if unknown:
+            later = np.isin(cid, unknown)
+            for i in np.flatnonzero(later).tolist():
+                self._defer(int(cid[i]), int(seq[i]), int(lt[i]), int(pt[i]),
+                            buf[int(start[i]) : int(end[i])],
+                            f"chunk at byte {cpos} +{pos + i * stride}")
+            keep = ~later
+            cid, seq, lt, pt, start, end = (cid[keep], seq[keep], lt[keep], pt[keep],
+                                            start[keep], end[keep])
+            if not cid.shape[0]:
+                return
+        cols.append((cid, seq, lt, pt, start, end))
 
     def _bad_in_chunk(self, cpos: int, pos: int, detail: str) -> None:
         where = f"chunk at byte {cpos} +{pos}"
@@ -335,16 +575,22 @@ class ContainerScanner:
     # -- the stream ----------------------------------------------------------------------
 
     def blocks(self) -> Iterator[MessageBlock]:
-        """Yield ``(position, buffer, messages)`` in file order.
+        """Yield :class:`MessageBlock` in file order.
 
-        One block per chunk (with the chunk's uncompressed data as ``buffer``), and blocks
-        of the messages found directly in the data section (``buffer`` None).
+        One block per chunk (with the chunk's uncompressed data as ``buf``), and blocks of the
+        messages found directly in the data section (``buf`` None).
 
         Raises
         ------
         RecordingFormatError
             The file is empty or does not start with the MCAP magic.
         """
+        try:
+            yield from self._walk()
+        finally:
+            self._stop_worker()
+
+    def _walk(self) -> Iterator[MessageBlock]:
         src = self._src
         head = src.read(len(MAGIC))
         if head != MAGIC:
@@ -392,10 +638,24 @@ class ContainerScanner:
                                 "the end of the file")
                     break
                 continue
-            content = src.read(length)
-            if len(content) < length:
+            outcome: _ChunkOutcome | None = None
+            if op == OP_CHUNK:
+                fut = self._chunk_future(pos, length)
+                if fut is not None:
+                    # the worker is the slower side when its chunk is not ready yet: the walk
+                    # then checks the next chunk's CRC itself (it releases the GIL too)
+                    self._worker_crc = fut.done()
+                    self._look_ahead(pos + RECORD_HEADER_BYTES + length)
+                    outcome = fut.result()
+            if outcome is not None:
+                content = b""
+                got = src.skip(length)
+            else:
+                content = src.read(length)
+                got = len(content)
+            if got < length:
                 self._ended(pos, data_end, f"a record of {length} bytes (opcode 0x{op:02x})",
-                            f"{len(content)} bytes")
+                            f"{got} bytes")
                 break
             where = f"byte {pos}"
             if op == OP_MESSAGE:
@@ -412,18 +672,21 @@ class ContainerScanner:
                     direct_pos = where
                 direct.append((cid, seq, lt, pt, payload, -1))
                 if len(direct) >= DIRECT_BLOCK_MESSAGES:
-                    yield direct_pos, None, direct
+                    yield MessageBlock.from_messages(direct_pos, direct)
                     direct = []
                 continue
             if direct:
-                yield direct_pos, None, direct
+                yield MessageBlock.from_messages(direct_pos, direct)
                 direct = []
             if op == OP_CHUNK:
-                buf, msgs = self._chunk(content, pos)
+                if outcome is None:
+                    outcome = _chunk_outcome(content, self._decompressor, self.validate_crcs)
                 del content
-                if msgs:
-                    yield where, buf, msgs
-                del buf, msgs
+                block = self._chunk(outcome, pos)
+                del outcome
+                if block is not None:
+                    yield block
+                del block
             elif op == OP_SCHEMA:
                 self._schema(content, 0, length, where)
             elif op == OP_CHANNEL:
@@ -443,13 +706,83 @@ class ContainerScanner:
                 if src.read(len(MAGIC)) != MAGIC:
                     self.report.warn(f"{self.path}: no closing magic after the Footer at {where}")
                 break
+        self._stop_worker()
         if direct:
-            yield direct_pos, None, direct
+            yield MessageBlock.from_messages(direct_pos, direct)
         self._flush_pending()
         late = self._release_deferred()
         if late:
-            yield "the end of the file (deferred messages)", None, late
+            yield MessageBlock.from_messages("the end of the file (deferred messages)", late)
         self._cross_check()
+
+    # -- the chunk read ahead ------------------------------------------------------------
+
+    def _chunk_future(self, pos: int, length: int) -> Future[_ChunkOutcome | None] | None:
+        """The worker's outcome of the chunk record at ``pos`` (asked for now if need be).
+
+        None when the chunk is read in the walk: the stream cannot be read ahead, or the
+        chunk is too small to be worth the hand-over.
+        """
+        ahead, self._ahead = self._ahead, None
+        if ahead is not None:
+            if ahead[0] == pos and ahead[1] == length:
+                return ahead[2]
+            ahead[2].cancel()
+        if PIPELINE_MIN_CHUNK_BYTES <= length and self._src.can_peek:
+            return self._submit(pos, length)
+        return None
+
+    def _look_ahead(self, start: int) -> None:
+        """Find the next chunk record from ``start`` and have the worker read it.
+
+        Reads record headers only, without moving the stream; stops at the first chunk, at
+        the end of the data section, or after :data:`_LOOKAHEAD_RECORDS` records.
+        """
+        src = self._src
+        rem = src.remaining()
+        if rem is None:
+            return
+        end = src.pos + rem
+        p = start
+        for _ in range(_LOOKAHEAD_RECORDS):
+            if end - p < RECORD_HEADER_BYTES:
+                return
+            op, length = RECORD_HEADER.unpack(src.look(p, RECORD_HEADER_BYTES))
+            if length > end - p - RECORD_HEADER_BYTES:
+                return
+            if op == OP_CHUNK:
+                if PIPELINE_MIN_CHUNK_BYTES <= length <= MAX_RECORD_BYTES:
+                    self._ahead = (p, length, self._submit(p, length))
+                return
+            if op in (OP_DATA_END, OP_FOOTER):
+                return
+            p += RECORD_HEADER_BYTES + length
+
+    def _submit(self, pos: int, length: int) -> Future[_ChunkOutcome | None]:
+        if self._worker is None:
+            self._worker = ThreadPoolExecutor(max_workers=1,
+                                              thread_name_prefix="rigtools-mcap-chunk")
+        return self._worker.submit(self._read_chunk_ahead, pos, length, self._worker_crc)
+
+    def _read_chunk_ahead(self, pos: int, length: int, check_crc: bool
+                          ) -> _ChunkOutcome | None:
+        """In the worker: the chunk record's content read at ``pos``, and its outcome.
+
+        None when the content cannot be read whole (the walk then reads it itself).
+        """
+        content = self._src.peek(pos + RECORD_HEADER_BYTES, length)
+        if len(content) < length:
+            return None
+        return _chunk_outcome(content, self._worker_decompressor, self.validate_crcs, check_crc)
+
+    def _stop_worker(self) -> None:
+        if self._ahead is not None:
+            self._ahead[2].cancel()
+            self._ahead = None
+        if self._worker is not None:
+            # wait for a chunk still being read: the stream may be closed right after
+            self._worker.shutdown(wait=True, cancel_futures=True)
+            self._worker = None
 
     def _ended(self, pos: int, data_end: bool, expected: str, found: str) -> None:
         """The file ends early: a loss in the data section, a warning in the summary."""
@@ -496,8 +829,8 @@ def iter_messages(stream: BinaryIO, path: str, report: IngestReport,
         The stream is empty or does not start with the MCAP magic.
     """
     sc = ContainerScanner(stream, path, report, validate_crcs)
-    for _where, _buf, msgs in sc.blocks():
-        for cid, seq, lt, pt, data, _start in msgs:
+    for block in sc.blocks():
+        for cid, seq, lt, pt, data, _start in block.messages():
             ch = sc.channels[cid]
             sch = sc.schemas.get(ch.schema_id)
             yield RawMessage(cid, ch.topic, sch.name if sch else "", sch.encoding if sch else "",

@@ -2,9 +2,10 @@
 
 The ingest (:func:`rigtools.ingest.mcap.ingest`) gives each channel one handler, chosen from
 the channel's :class:`~rigtools.ingest.mcap_decoders.Decoder` and the mapping. A handler
-receives the channel's messages block by block (:meth:`ChannelHandler.add`) and hands
-what it gathered to the :class:`~rigtools.ingest.builder.RecordingBuilder`, per block or at
-the end of the file (:meth:`ChannelHandler.finish`).
+receives the channel's messages block by block (:meth:`ChannelHandler.add`: a
+:class:`~rigtools.ingest.mcap_container.MessageBlock` of the channel's messages of one chunk)
+and hands what it gathered to the :class:`~rigtools.ingest.builder.RecordingBuilder`, per
+block or at the end of the file (:meth:`ChannelHandler.finish`).
 
 ==========================  =====================================================  ===========
 handler                     what it makes                                          when
@@ -32,7 +33,7 @@ import numpy as np
 from rigtools.errors import MappingError
 from rigtools.ingest.builder import RecordingBuilder
 from rigtools.ingest.layout import SlowSpec, UniformSpec
-from rigtools.ingest.mcap_container import ScannedMessage
+from rigtools.ingest.mcap_container import MessageBlock, ScannedMessage
 from rigtools.ingest.mcap_decoders import (
     AccelBatchColumns,
     Decoder,
@@ -45,6 +46,8 @@ from rigtools.ingest.recording import IngestReport
 from rigtools.ingest.timebase import indices_from_stamps
 
 __all__ = [
+    "MIN_SLAB_VALUES",
+    "SLAB_VALUES",
     "BatchHandler",
     "ChannelHandler",
     "DecodingHandler",
@@ -100,17 +103,11 @@ class ChannelHandler:
         self.ctx = ctx
         self.channel = channel
 
-    def add(self, msgs: list[ScannedMessage], where: str, buf: Any = None) -> None:
-        """Take one block of the channel's messages.
+    def add(self, block: MessageBlock) -> None:
+        """Take one block of the channel's messages (in file order).
 
-        Parameters
-        ----------
-        msgs : list of ScannedMessage
-            The channel's messages in the block, in file order.
-        where : str
-            Where the block was found, for tallies.
-        buf : bytes-like or None
-            The block's common buffer (a chunk's uncompressed data) when it has one.
+        ``block.where`` tells where it was found, for tallies; ``block.buf`` is the block's
+        common buffer (a chunk's uncompressed data) when it has one.
         """
         raise NotImplementedError
 
@@ -125,9 +122,9 @@ class RejectHandler(ChannelHandler):
         super().__init__(ctx, channel)
         self.reason = reason
 
-    def add(self, msgs: list[ScannedMessage], where: str, buf: Any = None) -> None:
+    def add(self, block: MessageBlock) -> None:
         """Count the block's messages."""
-        self.ctx.report.reject(self.reason, len(msgs), where)
+        self.ctx.report.reject(self.reason, len(block), block.where)
 
 
 class DecodingHandler(ChannelHandler):
@@ -137,11 +134,11 @@ class DecodingHandler(ChannelHandler):
         super().__init__(ctx, channel)
         self.decode = decoder.decode
 
-    def _decoded(self, msgs: list[ScannedMessage], where: str
-                 ) -> Iterator[tuple[ScannedMessage, Any]]:
+    def _decoded(self, block: MessageBlock) -> Iterator[tuple[ScannedMessage, Any]]:
         """Each message with its decoded payload; one that does not decode is counted."""
         decode = self.decode
-        for m in msgs:
+        where = block.where
+        for m in block.messages():
             try:
                 payload = decode(m[4])
             except PayloadDecodeError as exc:
@@ -166,6 +163,12 @@ class _BatchAcc:
     values: list[np.ndarray] = field(default_factory=list)
 
 
+#: Samples per slab a :class:`BatchHandler` cuts its decoded values from (8 MiB of float32);
+#: the first slab of a channel is smaller when its first block is (32 blocks' worth, at least
+#: :data:`MIN_SLAB_VALUES`); a block larger than a slab gets its own.
+SLAB_VALUES = 1 << 21
+MIN_SLAB_VALUES = 1 << 16
+
 #: 2-D blocks for the builder: row counters (int64), float32 rows, row stamps (ns, uint64).
 _Blocks = list[tuple[np.ndarray, np.ndarray, np.ndarray]]
 
@@ -189,21 +192,43 @@ class BatchHandler(DecodingHandler):
         self.decode_many = decoder.decode_many
         self.spec = spec
         self.rate_warned = False
+        self._slab: np.ndarray | None = None
+        self._slab_used = 0
 
-    def add(self, msgs: list[ScannedMessage], where: str, buf: Any = None) -> None:
+    def _values_out(self, m: int, k: int) -> np.ndarray:
+        """Room for ``m`` rows of ``k`` float32 values, cut from the channel's current slab.
+
+        The builder keeps every block until the end of the file; one large allocation per
+        :data:`SLAB_VALUES` samples instead of one per chunk saves the page faults of many
+        fresh buffers (arrays of 4 MiB and more are backed by huge pages where the system
+        offers them). A slab lives as long as any block cut from it; its untouched tail costs
+        address space only.
+        """
+        n = m * k
+        slab = self._slab
+        if slab is None or slab.shape[0] - self._slab_used < n:
+            size = SLAB_VALUES if slab is not None else \
+                min(SLAB_VALUES, max(MIN_SLAB_VALUES, 32 * n))
+            slab = self._slab = np.empty(max(n, size), np.float32)
+            self._slab_used = 0
+        out = slab[self._slab_used : self._slab_used + n].reshape(m, k)
+        self._slab_used += n
+        return out
+
+    def add(self, block: MessageBlock) -> None:
         """Decode a block (all at once when it allows) and hand it to the builder."""
-        if buf is not None and self.decode_many is not None and len(msgs) > 1:
-            starts = np.fromiter((m[5] for m in msgs), np.int64, len(msgs))
-            ends = starts + np.fromiter((len(m[4]) for m in msgs), np.int64, len(msgs))
-            cols: AccelBatchColumns | None = self.decode_many(buf, starts, ends)
+        if block.buf is not None and block.start is not None and block.end is not None \
+                and self.decode_many is not None and len(block) > 1:
+            cols: AccelBatchColumns | None = self.decode_many(block.buf, block.start, block.end,
+                                                              self._values_out)
             if cols is not None:
-                self.ctx.report.decoded += len(msgs)
+                self.ctx.report.decoded += len(block)
                 self._flush(cols.channel, cols.unit, cols.sample_rate_Hz,
                             [(cols.first_sample_index, cols.values, cols.stamp_ns)])
                 return
         accs: dict[tuple[str, str, float], _BatchAcc] = {}
         n_ok = 0
-        for _m, b in self._decoded(msgs, where):
+        for _m, b in self._decoded(block):
             n_ok += 1
             key = (b.channel, b.unit, b.sample_rate_Hz)
             acc = accs.get(key)
@@ -277,11 +302,11 @@ class ImuHandler(DecodingHandler):
         self.rows: list[tuple[int, float, float, float]] = []
         self.log_times: list[int] = []
 
-    def add(self, msgs: list[ScannedMessage], where: str, buf: Any = None) -> None:
+    def add(self, block: MessageBlock) -> None:
         """Collect header stamps and accelerations."""
         rows, logs = self.rows, self.log_times
         n0 = len(rows)
-        for m, sample in self._decoded(msgs, where):
+        for m, sample in self._decoded(block):
             rows.append(sample)
             logs.append(m[2])
         self.ctx.report.decoded += len(rows) - n0
@@ -361,10 +386,11 @@ class SlowValueHandler(DecodingHandler):
         self.spec = spec
         self.points: dict[str, tuple[str, list[int], list[float]]] = {}
 
-    def add(self, msgs: list[ScannedMessage], where: str, buf: Any = None) -> None:
+    def add(self, block: MessageBlock) -> None:
         """Collect points by signal; a point in another unit than its signal's is counted."""
         spec = self.spec
-        for _m, p in self._decoded(msgs, where):
+        where = block.where
+        for _m, p in self._decoded(block):
             name = spec.name if spec is not None else p.name
             unit = spec.unit if spec is not None and spec.unit is not None else p.unit
             entry = self.points.get(name)
@@ -399,9 +425,9 @@ class ScalarHandler(DecodingHandler):
         self.t: list[int] = []
         self.v: list[float] = []
 
-    def add(self, msgs: list[ScannedMessage], where: str, buf: Any = None) -> None:
+    def add(self, block: MessageBlock) -> None:
         """Collect log times and values."""
-        for m, value in self._decoded(msgs, where):
+        for m, value in self._decoded(block):
             self.v.append(value)
             self.t.append(m[2])
             self.ctx.report.decoded += 1
@@ -441,9 +467,9 @@ class MappedHandler(DecodingHandler):
         self.stamps: list[int] = []
         self.cols: list[list[Any]] = [[] for _ in specs]
 
-    def add(self, msgs: list[ScannedMessage], where: str, buf: Any = None) -> None:
+    def add(self, block: MessageBlock) -> None:
         """Collect each mapped field and the message's stamp (header stamp, else log time)."""
-        for m, obj in self._decoded(msgs, where):
+        for m, obj in self._decoded(block):
             row = []
             for spec in self.specs:
                 try:

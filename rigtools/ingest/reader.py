@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import json
 import math
@@ -97,11 +98,12 @@ def read(
     module = reader_module(kind)
     if kind == "parquet":
         return module.read_parquet(p)
-    # The hash runs in a second thread while the reader works (hashlib releases the GIL).
+    # The hash runs in a second thread (hashlib releases the GIL): beside the reader for CAN
+    # logs; for MCAP, whose reader keeps a decompression worker busy on the second core,
+    # beside the building of the channels instead.
     hasher = ThreadPoolExecutor(max_workers=1, thread_name_prefix="rigtools-sha256")
-    hashing = hasher.submit(sha256_of, p)
     try:
-        return _read_with(p, kind, module, dbc, mapping, metadata, strict_dbc, hashing)
+        return _read_with(p, kind, module, dbc, mapping, metadata, strict_dbc, hasher)
     finally:
         hasher.shutdown(wait=False)  # after a refusal, let the hash finish on its own
 
@@ -114,8 +116,9 @@ def _read_with(
     mapping: str | Path | ChannelMapping | None,
     metadata: RunMetadata | None,
     strict_dbc: bool,
-    hashing: Any,
+    hasher: ThreadPoolExecutor,
 ) -> Recording:
+    hashing = None if kind == "mcap" else hasher.submit(sha256_of, p)
     if isinstance(mapping, str | Path):
         mapping = load_mapping(mapping)
     report = IngestReport(units="messages" if kind == "mcap" else "frames")
@@ -138,9 +141,13 @@ def _read_with(
     meta = _merge_metadata(extra, mapping, metadata, report)
     # Through JSON once, so the layout compares equal after a Parquet round trip.
     layout_desc = json.loads(json.dumps(layout_desc))
+    if hashing is None:
+        hashing = hasher.submit(sha256_of, p)
+    placeholder = Provenance(str(p), "", 0, kind, versions(), report, layout_desc)
+    rec = builder.build(meta, placeholder)
     digest, size = hashing.result()
-    prov = Provenance(str(p), digest, size, kind, versions(), report, layout_desc)
-    rec = builder.build(meta, prov)
+    rec = dataclasses.replace(rec, provenance=dataclasses.replace(
+        placeholder, source_sha256=digest, source_size_bytes=size))
     if not rec.channels and not rec.slow:
         reasons = ", ".join(f"{k}: {v}" for k, v in sorted(report.rejected.items())) or "none"
         raise NoDataError(
