@@ -8,7 +8,11 @@ effusivity, the Hertzian half-width, the frictional heat flux ``q = gamma p f V`
 000), ``reference_state`` (what the temperatures of a thermal deformation count from, and what
 the centre distance does; SEED-NOTES 8), ``expansion`` (thermal normal deformation of the
 flanks along the line of action, seed 000's ``Delta r_k`` reconstructed with an angular update
-that keeps similarity; seed 001's temperature stiffness).
+that keeps similarity; seed 001's temperature stiffness), ``thermoelastic`` (seed 000's
+thermoelastic pair stiffness with backlash, the critical compensation gap ``c* = (1 - chi)
+(Delta_1 + Delta_2)``, Table 5's regimes, the jammed state; the thermal closure is an input),
+``natural_frequency`` (mesh natural frequency from the cycle-mean thermoelastic stiffness and the
+gears' equivalent mass, prepared once and vectorised over runs and parameter sets).
 """
 
 from models.thermal.expansion import (
@@ -35,30 +39,86 @@ from models.thermal.flash import (
     hertz_half_width,
     thermal_effusivity,
 )
+from models.thermal.natural_frequency import (
+    JAMMED_MODELS,
+    JammedModel,
+    NaturalFrequency,
+    NaturalFrequencyModel,
+    equivalent_mass,
+    gear_inertia,
+    mesh_natural_frequency,
+    mesh_natural_frequency_scalar,
+    prepare_natural_frequency,
+)
 from models.thermal.reference_state import HOUSING_MODELS, HousingModel, ThermalReference
+from models.thermal.thermoelastic import (
+    FALLS,
+    JAMMED_STAND_IN,
+    RISES,
+    SEED_000_CHI,
+    UNCHANGED,
+    CriticalGapSearch,
+    DoubleFlankContact,
+    ThermalJamError,
+    ThermoelasticStiffness,
+    critical_gap,
+    critical_gap_numerical,
+    double_flank_contact,
+    elastic_backlash_stiffness,
+    stiffness_regime,
+    thermoelastic_mesh_stiffness,
+    thermoelastic_pair_stiffness,
+    thermoelastic_stiffness,
+)
 
 __all__ = [
     "BLOK_COEFFICIENT_HERTZIAN",
     "BLOK_COEFFICIENT_SEED_001",
     "DEFAULT_BORE_FRACTION",
     "ETA_SEED_001",
+    "FALLS",
     "FRICTION_SEED_000",
     "HEAT_CONVERSION_SEED_000",
     "HOUSING_MODELS",
+    "JAMMED_MODELS",
+    "JAMMED_STAND_IN",
+    "RISES",
+    "SEED_000_CHI",
+    "UNCHANGED",
+    "CriticalGapSearch",
+    "DoubleFlankContact",
     "FlankDeformation",
     "FlashTemperature",
     "GearTemperature",
     "HousingModel",
+    "JammedModel",
+    "NaturalFrequency",
+    "NaturalFrequencyModel",
     "TemperatureStiffness",
     "ThermalDeformation",
+    "ThermalJamError",
     "ThermalReference",
+    "ThermoelasticStiffness",
     "blok_flash_temperature",
+    "critical_gap",
+    "critical_gap_numerical",
     "disc_mean_temperature_rise",
     "disc_rim_expansion",
+    "double_flank_contact",
+    "elastic_backlash_stiffness",
+    "equivalent_mass",
     "flash_temperature",
     "frictional_heat_flux",
+    "gear_inertia",
     "hertz_half_width",
+    "mesh_natural_frequency",
+    "mesh_natural_frequency_scalar",
+    "prepare_natural_frequency",
+    "stiffness_regime",
     "temperature_stiffness",
     "thermal_deformation",
     "thermal_effusivity",
+    "thermoelastic_mesh_stiffness",
+    "thermoelastic_pair_stiffness",
+    "thermoelastic_stiffness",
 ]
