@@ -4,7 +4,9 @@ The presentation layer (STYLE.md, convention 5): plotting functions read the res
 ``models`` and ``rigtools`` analysis and return figures drawn on the Agg canvas, without
 ``matplotlib.pyplot`` and its global state; nothing here computes physics of its own.
 
-Modules: ``stiffness`` (VVMS/FVMS, load sharing and LSTE over a mesh cycle; seed 003 Figs. 4, 6).
+Modules: ``stiffness`` (VVMS/FVMS, load sharing and LSTE over a mesh cycle; seed 003 Figs. 4, 6),
+``thermal`` (thermoelastic mean mesh stiffness and mesh natural frequency against torque, with
+the critical compensation gap and the jammed state; seed 000 Tables 5-6).
 """
 
 from rigtools.plots.stiffness import (
@@ -13,10 +15,24 @@ from rigtools.plots.stiffness import (
     plot_mesh_cycle,
     save_png,
 )
+from rigtools.plots.thermal import (
+    TABLE_6_TORQUES_NM,
+    ThermalClosure,
+    plot_natural_frequency_vs_load,
+    plot_stiffness_vs_load,
+    seed_000_hot_state_closure,
+    thermal_figures,
+)
 
 __all__ = [
     "FIGURE_WIDTH_IN",
+    "TABLE_6_TORQUES_NM",
+    "ThermalClosure",
     "mesh_cycle_figures",
     "plot_mesh_cycle",
+    "plot_natural_frequency_vs_load",
+    "plot_stiffness_vs_load",
     "save_png",
+    "seed_000_hot_state_closure",
+    "thermal_figures",
 ]
