@@ -233,6 +233,11 @@ class GearPair:
             raise GeometryError("pinion.tip_diameter_m", 2 * self.tip_radius(1),
                                 "involute interference: contact would end below the "
                                 "wheel base circle")
+        if self.backlash_circumferential < -1e-9:
+            raise GeometryError("centre_distance_m", self.centre_distance,
+                                f"teeth would overlap: below the zero-backlash centre distance "
+                                f"for these shifts (circumferential backlash "
+                                f"{self.backlash_circumferential * 1e6:.1f} um)")
         if self.contact_ratio < 1.0:
             raise GeometryError("contact_ratio", self.contact_ratio,
                                 "must be >= 1 for continuous meshing (check tip diameters "

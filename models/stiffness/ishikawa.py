@@ -199,6 +199,9 @@ class EquivalentTooth:
     contact_half_thickness_m : numpy.ndarray
         Distance of the contact point from the centreline (m); the Weber contact term uses
         ``contact_half_thickness_m / cos(omega_k)``.
+    load_clamped : numpy.ndarray or None
+        Positions whose load line crosses the centreline below the root circle; their load
+        is taken at the root (``h_k = 0``).
     """
 
     gear: int
@@ -216,6 +219,7 @@ class EquivalentTooth:
     h_k_m: np.ndarray
     omega_k_rad: np.ndarray
     contact_half_thickness_m: np.ndarray
+    load_clamped: np.ndarray | None = None
 
     def width(self, h_m: ArrayLike) -> np.ndarray:
         """Width ``S(h)`` of the equivalent tooth at heights ``h`` (m); see the module notes."""
@@ -376,14 +380,26 @@ def equivalent_tooth(
     omega = alpha_k - psi_k
     h_k = r_k * (np.cos(psi_k) - np.sin(psi_k) * np.tan(omega)) - rf
     h_i = y_apex - rf
-    if np.any(h_k < 0) or np.any(h_k >= h_i):
-        raise GeometryError("s_m", float(np.asarray(s).flat[0]),
-                            f"load line crosses the centreline outside [0, h_i={h_i:.6g}) m")
+    who = "pinion" if gear == 1 else "wheel"
+    above = np.asarray(h_k >= h_i)
+    if above.any():
+        i = int(np.flatnonzero(above.ravel())[0])
+        raise GeometryError(f"{who} equivalent tooth", float(np.asarray(s).ravel()[i]),
+                            f"the load line crosses the centreline at h_k = "
+                            f"{float(np.asarray(h_k).ravel()[i]) * 1e3:.4f} mm, at or above the "
+                            f"apex h_i = {h_i * 1e3:.4f} mm")
+    # Low on the flank of a strongly inclined load (large operating pressure angle, negative
+    # shift, many teeth) the load line can cross the centreline just below the root circle.
+    # Ishikawa's beam has no section there: the load is taken at the root (h_k = 0), where its
+    # bending arm vanishes, and the positions are flagged in `load_clamped`.
+    load_clamped = np.asarray(h_k < 0)
+    h_k = np.maximum(h_k, 0.0)
     return EquivalentTooth(
         gear=gear, anchor=anchor, root_radius_m=rf, anchor_radius_m=r_anchor, tip_radius_m=ra,
         S_F_m=s_f, h_r_m=h_r, h_i_m=h_i, h_tip_m=y_t - rf, S_tip_m=2 * x_t,
         s_m=s, contact_radius_m=r_k, h_k_m=h_k, omega_k_rad=omega,
         contact_half_thickness_m=r_k * np.sin(psi_k),
+        load_clamped=load_clamped,
     )
 
 
@@ -430,8 +446,10 @@ class IshikawaDeflection:
 
     @property
     def stiffness_N_per_m(self) -> np.ndarray:  # noqa: N802 (unit in the name, STYLE 4.4)
-        """Single-tooth stiffness ``k_E = F / delta`` (N/m)."""
-        return self.load_N / self.total_m
+        """Single-tooth stiffness ``k_E = F / delta`` (N/m); inf where the load line passes
+        through the root (no Ishikawa deflection there, see ``EquivalentTooth.load_clamped``)."""
+        with np.errstate(divide="ignore"):
+            return self.load_N / self.total_m
 
 
 def _bt_bracket(u: np.ndarray) -> np.ndarray:
@@ -709,9 +727,14 @@ def tooth_pair_stiffness(
     d2 = ishikawa_deflection(pair, s, 2, load_N=load_N, include_hertz=include_hertz,
                              shear_coefficient=shear_coefficient, anchor=anchor)
     k1, k2 = d1.stiffness_N_per_m, d2.stiffness_N_per_m
+    # Teeth in series as compliances: a tooth whose load line passes through its root (load
+    # taken at h_k = 0, no bending arm; `equivalent_tooth(...).load_clamped`) has no Ishikawa
+    # deflection there and k_E = inf; the pair is then the other tooth, never inf/inf.
+    with np.errstate(divide="ignore"):
+        k_ep = 1.0 / (1.0 / k1 + 1.0 / k2)
     return ToothPairStiffness(
         s_m=s, load_N=d1.load_N, k_E1_N_per_m=k1, k_E2_N_per_m=k2,
-        k_EP_N_per_m=k1 * k2 / (k1 + k2), face_width_m=pair.face_width_m,
+        k_EP_N_per_m=k_ep, face_width_m=pair.face_width_m,
         include_hertz=d1.include_hertz, pinion=d1, wheel=d2,
     )
 

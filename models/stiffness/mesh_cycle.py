@@ -4,7 +4,10 @@ Over one base pitch of pinion rotation (phase ``tau`` in [0, 1), ``tau = 0`` whe
 the start of contact A, the :meth:`~models.geometry.GearPair.pair_positions` convention), the
 tooth pairs sit at ``s_m(tau) = A + (tau + m) p_b``. Every pair that could touch is a *slot*:
 ``m = -1`` (the approaching pair, before A) up to ``m = ceil(eps)`` (beyond E), so
-``ceil(eps) + 2`` slots, slot 0 the most advanced. At each phase:
+``ceil(eps) + 2`` slots, slot 0 the most advanced (so corner contact can reach at most one
+pair beyond each end: the effective contact ratio saturates near ``ceil(eps) + 1``, reached
+only at torques far above a pair's rating, e.g. 3.0 for the Kahraman pair at 1e4 N m). At
+each phase:
 
 1. gaps ``g = e(s) + S(s)``: the profile error (tip relief, :mod:`models.stiffness.tip_relief`, or
    any callable) plus the separation distance outside AE

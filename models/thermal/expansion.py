@@ -530,13 +530,18 @@ class TemperatureStiffness:
     ----------
     tooth_pinion_N_m2, tooth_wheel_N_m2 : numpy.ndarray
         ``k_w1 = F / (b sigma_1)``, ``k_w2 = F / (b sigma_2)``: per unit face width
-        (N/m per m = N/m^2); ``inf`` where ``sigma_i = 0``.
+        (N/m per m = N/m^2); NaN where ``sigma_i = 0`` (undefined, see ``undefined``).
     pair_N_m2 : numpy.ndarray
-        ``k_w = k_w1 k_w2 / (k_w1 + k_w2) = F / (b (sigma_1 + sigma_2))`` (N/m^2).
+        ``k_w = k_w1 k_w2 / (k_w1 + k_w2) = F / (b (sigma_1 + sigma_2))`` (N/m^2); NaN where
+        both deformations vanish.
     pair_N_m : numpy.ndarray
         ``b k_w = F / (sigma_1 + sigma_2)`` (N/m), the pair value over the whole face width.
     mesh_N_m : numpy.ndarray or None
-        ``k = k_t + b k_w`` (N/m) when a ``k_t`` was given.
+        ``k = k_t + b k_w`` (N/m) when a ``k_t`` was given; NaN where undefined.
+    undefined : numpy.ndarray
+        Where ``sigma_1 + sigma_2 = 0``: the formula has no finite value there (it is not a
+        stiffness that vanishes with the heating, it diverges); the caller decides what a
+        cold pair means (seed 000's deflection balance has no such singularity).
     """
 
     tooth_pinion_N_m2: np.ndarray
@@ -544,6 +549,7 @@ class TemperatureStiffness:
     pair_N_m2: np.ndarray
     pair_N_m: np.ndarray
     mesh_N_m: np.ndarray | None
+    undefined: np.ndarray | None = None
 
 
 def temperature_stiffness(
@@ -600,9 +606,9 @@ def temperature_stiffness(
     ``sigma`` vanish, ``k_w`` does not vanish but diverges, so a cold gear pair would be
     infinitely stiff. (Seed 000's treatment, the thermal closure entering the deflection
     balance ``f_n / k_EP - (1 - chi)(Delta_1 + Delta_2) + c``, does not have this defect.)
-    **Limit:** ``sigma_i = 0`` returns ``k_wi = inf`` (NumPy ``inf``, no warning), and the pair
-    value is then the other tooth's; both zero gives ``inf`` for the pair and for ``k``. A
-    zero load with a positive ``sigma`` gives 0.
+    **Limit:** the formula diverges as ``sigma -> 0``; rigtools never returns an infinite
+    stiffness: ``sigma_i = 0`` gives NaN for that tooth, ``sigma_1 + sigma_2 = 0`` NaN for the
+    pair and for ``k``, flagged in ``undefined``. A zero load with a positive ``sigma`` gives 0.
 
     Examples
     --------
@@ -611,8 +617,9 @@ def temperature_stiffness(
     >>> kw = temperature_stiffness(1000.0, 0.014, 5e-6, 3e-6, mesh_stiffness_N_m=3e8)
     >>> round(float(kw.pair_N_m) / 1e6, 1), round(float(kw.mesh_N_m) / 1e6, 1)  # N/um
     (125.0, 425.0)
-    >>> float(temperature_stiffness(1000.0, 0.014, 0.0, 0.0).pair_N_m)
-    inf
+    >>> cold = temperature_stiffness(1000.0, 0.014, 0.0, 0.0)
+    >>> float(cold.pair_N_m), bool(cold.undefined)
+    (nan, True)
     """
     f = _array("load_N", load_N)
     b = float(face_width_m)
@@ -625,10 +632,11 @@ def temperature_stiffness(
             raise ModelError(f"`{name}` must be >= 0, was {float(a.min()):.6g} (minimum); a "
                              "negative thermal deformation would give a negative k_w")
     f, s1, s2 = np.broadcast_arrays(f, s1, s2)
-    inf = np.full(f.shape, np.inf)
-    k1 = np.divide(f, b * s1, out=inf.copy(), where=s1 > 0)
-    k2 = np.divide(f, b * s2, out=inf.copy(), where=s2 > 0)
-    k_pair = np.divide(f, b * (s1 + s2), out=inf.copy(), where=(s1 + s2) > 0)
+    nan = np.full(f.shape, np.nan)
+    k1 = np.divide(f, b * s1, out=nan.copy(), where=s1 > 0)
+    k2 = np.divide(f, b * s2, out=nan.copy(), where=s2 > 0)
+    undefined = (s1 + s2) <= 0
+    k_pair = np.divide(f, b * (s1 + s2), out=nan.copy(), where=~undefined)
     mesh = None
     if mesh_stiffness_N_m is not None:
         kt = _array("mesh_stiffness_N_m", mesh_stiffness_N_m)
@@ -636,4 +644,4 @@ def temperature_stiffness(
             raise ModelError(f"`mesh_stiffness_N_m` must be >= 0, was {float(kt.min()):.6g}")
         mesh = kt + b * k_pair
     return TemperatureStiffness(tooth_pinion_N_m2=k1, tooth_wheel_N_m2=k2, pair_N_m2=k_pair,
-                                pair_N_m=b * k_pair, mesh_N_m=mesh)
+                                pair_N_m=b * k_pair, mesh_N_m=mesh, undefined=undefined)

@@ -10,6 +10,7 @@ module                                   what it holds
 :mod:`~rigtools.ingest.mcap_decompress`  chunk size limits, bounded zstd/lz4 decompression, CRC
 :mod:`~rigtools.ingest.mcap_container`   the streaming record walk (:func:`iter_messages`)
 :mod:`~rigtools.ingest.mcap_decoders`    payload decoders chosen by message encoding and schema
+:mod:`~rigtools.ingest.mcap_timing`      Imu grids fitted to stamps, counter restarts
 :mod:`~rigtools.ingest.mcap_handlers`    per-channel handlers feeding the builder
 this module                              ``NAME``, ``KIND``, :func:`sniff`, :func:`ingest`
 =======================================  =========================================================
@@ -23,7 +24,13 @@ reason                     what happened
 ``no_decoder``             no decoder for the channel's message encoding and schema
 ``not_in_mapping``         a mapping was given and does not name the topic
 ``bad_schema``             the schema names a known type but does not parse or differs
-``decode_error``           the payload does not decode under its schema
+``decode_error``           the payload does not decode under its schema (a JSON rigtools message
+                           is checked against its JSON Schema: fields, types, ranges), or a
+                           mapped field holds no number
+``missing_field``          a message lacks a field the mapping names (other messages have it)
+``empty_batch``            an AccelBatch with no values
+``no_sample_rate``         too few distinct Imu stamps to estimate a rate
+``inconsistent_unit``      a slow point in another unit than its signal's earlier points
 ``unknown_channel``        a message names a channel id no Channel record in the file defines
 ``absurd_chunk_size``      a chunk claims an uncompressed size beyond the limits
 ``chunk_crc_mismatch``     a chunk's data does not match its ``uncompressed_crc``
@@ -38,6 +45,12 @@ reason                     what happened
 ``truncated_record``       the file ends inside a record, or before its DataEnd record
 =========================  ===================================================================
 
+The first position of each reason names the chunk and the message record's offset in it.
+A ``.mcap.gz`` whose gzip stream breaks off is read up to the break (``truncated_stream``,
+counted by :func:`rigtools.ingest.registry.open_source`): the complete chunks before it are
+kept. AccelBatch payloads that name the same channel on several topics are kept apart as
+``<channel>@<topic>`` (with a warning).
+
 The limits are :data:`MAX_CHUNK_UNCOMPRESSED_BYTES`, :data:`MAX_CHUNK_RATIO` (above
 :data:`FREE_CHUNK_BYTES`), :data:`MAX_RECORD_BYTES` and :data:`MAX_DEFERRED_BYTES`. How the
 messages of a refused chunk are counted, and when a message that comes before its Channel
@@ -46,6 +59,7 @@ record is still read, is told in :mod:`rigtools.ingest.mcap_container`.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import BinaryIO, Final, TypeVar
 
 from rigtools.errors import MappingError
@@ -177,6 +191,30 @@ def _only_spec(ctx: HandlerContext, ch: ChannelRecord, specs: list[UniformSpec |
     return only
 
 
+def _keep_channels_apart(ctx: HandlerContext, handlers: Iterable[ChannelHandler]) -> None:
+    """Rename AccelBatch channels that payloads on several topics name alike.
+
+    Two sensors both saying ``accel_1`` on ``/accel/a`` and ``/accel/b`` would otherwise
+    fall into one channel, half their samples dropped as duplicates: each becomes
+    ``accel_1@/accel/a``, ``accel_1@/accel/b``, with a warning. Messages of one topic on
+    several MCAP channels stay together.
+    """
+    batch = [h for h in handlers if isinstance(h, BatchHandler) and h.spec is None]
+    topics: dict[str, set[str]] = {}
+    for h in batch:
+        for name in h.channel_names():
+            topics.setdefault(name, set()).add(h.channel.topic)
+    shared = {name for name, where in topics.items() if len(where) > 1}
+    if not shared:
+        return
+    for name in sorted(shared):
+        ctx.report.warn(f"{ctx.path}: channel {name!r} is named by the AccelBatch payloads of "
+                        f"topics {', '.join(map(repr, sorted(topics[name])))}; kept apart as "
+                        + ", ".join(repr(f"{name}@{t}") for t in sorted(topics[name])))
+    for h in batch:
+        h.rename_shared(shared)
+
+
 def _specs_by_topic(mapping: ChannelMapping | None) -> dict[str, list[UniformSpec | SlowSpec]]:
     """The mapping's MCAP entries (those naming a topic), by topic, in mapping order."""
     by_topic: dict[str, list[UniformSpec | SlowSpec]] = {}
@@ -228,7 +266,8 @@ def ingest(
     RecordingFormatError
         Empty file, or no MCAP magic at byte 0.
     MappingError
-        The mapping names a field a topic's messages do not have, or a non-numeric one.
+        The mapping names a field none of a topic's messages has, or one that holds no
+        number in any of them (messages lacking it among others are counted instead).
     """
     report.units = "messages"
     scanner = ContainerScanner(stream, path, report)
@@ -244,6 +283,7 @@ def ingest(
                 schema = scanner.schemas.get(ch.schema_id) if ch.schema_id else None
                 h = handlers[cid] = _handler_for(ctx, ch, schema, by_topic)
             h.add(group)
+    _keep_channels_apart(ctx, handlers.values())
     for h in handlers.values():
         h.finish()
     seen = {ch.topic for ch in scanner.channels.values()}

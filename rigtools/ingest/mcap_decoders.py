@@ -59,6 +59,8 @@ __all__ = [
     "ACCEL_BATCH_SCHEMA_NAME",
     "IMU_SCHEMA_NAME",
     "IMU_SCHEMA_TEXT",
+    "MAX_SAMPLE_RATE_HZ",
+    "MIN_SAMPLE_RATE_HZ",
     "SLOW_VALUE_SCHEMA",
     "SLOW_VALUE_SCHEMA_FILE",
     "SLOW_VALUE_SCHEMA_NAME",
@@ -143,6 +145,10 @@ _ROS2_NUMERIC: Final = frozenset({
 })
 _UINT64_MAX: Final = (1 << 64) - 1
 _INT64_MAX: Final = (1 << 63) - 1
+
+#: Sample rates an AccelBatch may state (Hz); one outside is counted ``decode_error``.
+MIN_SAMPLE_RATE_HZ: Final = 1e-3
+MAX_SAMPLE_RATE_HZ: Final = 1e7
 
 
 class PayloadDecodeError(RecordingFormatError):
@@ -865,90 +871,152 @@ def decode_accel_batches_protobuf(
 def _checked_batch(
     channel: str, unit: str, rate: float, first: int, stamp: int, values: np.ndarray
 ) -> AccelBatch:
-    if not (math.isfinite(rate) and rate > 0.0):
-        raise PayloadDecodeError(None, None, "a finite, positive sample_rate_Hz", repr(rate))
+    if not (math.isfinite(rate) and MIN_SAMPLE_RATE_HZ <= rate <= MAX_SAMPLE_RATE_HZ):
+        raise PayloadDecodeError(None, None, f"a finite sample_rate_Hz from "
+                                 f"{MIN_SAMPLE_RATE_HZ:g} to {MAX_SAMPLE_RATE_HZ:g} Hz",
+                                 repr(rate))
     if first > _INT64_MAX:
         raise PayloadDecodeError(None, None, "first_sample_index below 2**63", str(first))
     return AccelBatch(channel, unit, float(rate), int(first), int(stamp), values)
 
 
 def _json(data: Any, expected: str) -> Any:
+    """``data`` parsed as JSON; anything that does not parse is a :class:`PayloadDecodeError`.
+
+    A document nested deeper than the parser's recursion limit is refused the same way.
+    """
     try:
         return json.loads(bytes(data))
     except (UnicodeDecodeError, ValueError) as exc:
         raise PayloadDecodeError(None, None, expected, str(exc)) from None
+    except RecursionError:
+        raise PayloadDecodeError(None, None, expected,
+                                 "a document nested too deeply to parse") from None
 
 
-def _json_object(data: Any) -> dict[str, Any]:
+def _json_object(data: Any, fields: frozenset[str] | None = None,
+                 what: str = "") -> dict[str, Any]:
+    """A JSON object; with ``fields``, one with exactly those keys.
+
+    (The rigtools schemas require all their fields and set ``additionalProperties`` false.)
+    """
     doc = _json(data, "a JSON object")
     if not isinstance(doc, dict):
         raise PayloadDecodeError(None, None, "a JSON object", type(doc).__name__)
+    if fields is not None and doc.keys() != fields:
+        missing = sorted(fields - doc.keys())
+        extra = sorted(doc.keys() - fields)
+        found = "; ".join(part for part in (
+            f"missing {', '.join(missing)}" if missing else "",
+            f"extra {', '.join(map(repr, extra))}" if extra else "") if part)
+        raise PayloadDecodeError(None, None, f"exactly the {what} fields "
+                                 f"{', '.join(sorted(fields))}", found)
     return doc
 
 
 def _uint64(name: str, v: Any) -> int:
     """``v`` when it is a JSON integer from 0 to 2**64 - 1 (not a bool)."""
     if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= _UINT64_MAX:
-        raise PayloadDecodeError(None, None, f"{name} as a uint64", repr(v))
+        raise PayloadDecodeError(None, None, f"{name} as a uint64", _short_repr(v))
     return v
 
 
-def _number(name: str, v: Any) -> int | float:
-    """``v`` when it is a JSON number (not a bool)."""
+def _float(name: str, v: Any) -> float:
+    """``v`` as a float when it is a JSON number (not a bool) a float can hold."""
     if isinstance(v, bool) or not isinstance(v, int | float):
-        raise PayloadDecodeError(None, None, f"a number {name}", repr(v))
-    return v
+        raise PayloadDecodeError(None, None, f"a number {name}", _short_repr(v))
+    try:
+        return float(v)
+    except OverflowError:  # an integer literal beyond the float range
+        raise PayloadDecodeError(None, None, f"a number {name} within the float range",
+                                 _short_repr(v)) from None
+
+
+def _short_repr(v: Any, limit: int = 40) -> str:
+    """``repr(v)``, cut to ``limit`` characters (a hostile payload may hold huge literals)."""
+    if isinstance(v, int) and not isinstance(v, bool) and v.bit_length() > 128:
+        return f"an integer of {v.bit_length()} bits"
+    try:
+        text = repr(v)
+    except RecursionError:
+        return "a deeply nested value"
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+_ACCEL_BATCH_KEYS: Final = frozenset(name for name, *_ in ACCEL_BATCH_FIELDS)
+_SLOW_VALUE_KEYS: Final = frozenset(SLOW_VALUE_SCHEMA["required"])
+_JSON_NUMBER_TYPES: Final = frozenset({int, float})
+
+
+def _json_values(raw: Any) -> np.ndarray:
+    """The ``values`` array of a JSON AccelBatch as float32: JSON numbers only (not bools).
+
+    NaN and Infinity tokens are kept (the builder marks them invalid and counts them); a
+    finite number beyond the float32 range becomes Inf the same way, without a warning.
+    """
+    if not isinstance(raw, list):
+        raise PayloadDecodeError(None, None, "values as an array", type(raw).__name__)
+    if not set(map(type, raw)) <= _JSON_NUMBER_TYPES:
+        bad = next(v for v in raw if type(v) not in _JSON_NUMBER_TYPES)
+        raise PayloadDecodeError(None, None, "values as an array of numbers",
+                                 f"an element {_short_repr(bad)}")
+    try:
+        values = np.asarray(raw, dtype=np.float64)
+    except OverflowError:  # an integer literal beyond the float range
+        raise PayloadDecodeError(None, None, "values within the float range",
+                                 "an integer literal beyond it") from None
+    with np.errstate(over="ignore"):
+        return values.astype(np.float32)
 
 
 def decode_accel_batch_json(data: bytes | memoryview) -> AccelBatch:
     """Decode a JSON ``rigtools.AccelBatch`` (``data_schemas/accel_batch.schema.json``).
 
-    ``values`` are cast to float32, the type the schema documents, so JSON and protobuf
-    recordings of the same samples are identical.
+    The document is checked against the schema: exactly the six fields, a non-empty string
+    ``channel``, a string ``unit``, a number ``sample_rate_Hz`` (finite, from
+    :data:`MIN_SAMPLE_RATE_HZ` to :data:`MAX_SAMPLE_RATE_HZ`), integer ``first_sample_index``
+    and ``stamp_ns`` (uint64; the counter below 2**63) and ``values`` an array of numbers
+    (NaN and Infinity tokens allowed). ``values`` are cast to float32, the type the schema
+    documents, so JSON and protobuf recordings of the same samples are identical.
 
     Raises
     ------
     PayloadDecodeError
-        Not JSON, not an object, a required field missing or of the wrong type.
+        Not JSON (or nested too deeply), not an object, a field missing, extra or of the
+        wrong type, or a number beyond what its field holds.
     """
-    doc = _json_object(data)
-    try:
-        channel, unit = doc["channel"], doc["unit"]
-        rate, first, stamp = doc["sample_rate_Hz"], doc["first_sample_index"], doc["stamp_ns"]
-        raw = doc["values"]
-    except KeyError as exc:
-        raise PayloadDecodeError(None, None, "the AccelBatch fields", f"no {exc}") from None
-    if not (isinstance(channel, str) and isinstance(unit, str)):
-        raise PayloadDecodeError(None, None, "string channel and unit", f"{channel!r}, {unit!r}")
-    first = _uint64("first_sample_index", first)
-    stamp = _uint64("stamp_ns", stamp)
-    rate = _number("sample_rate_Hz", rate)
-    if not isinstance(raw, list):
-        raise PayloadDecodeError(None, None, "values as an array", type(raw).__name__)
-    try:
-        values = np.asarray(raw, dtype=np.float64).astype(np.float32)
-    except (TypeError, ValueError) as exc:
-        raise PayloadDecodeError(None, None, "values as numbers", str(exc)) from None
-    if values.ndim != 1:
-        raise PayloadDecodeError(None, None, "values as a flat array", f"shape {values.shape}")
-    return _checked_batch(channel, unit, float(rate), first, stamp, values)
+    doc = _json_object(data, _ACCEL_BATCH_KEYS, "AccelBatch")
+    channel, unit = doc["channel"], doc["unit"]
+    if not (isinstance(channel, str) and channel and isinstance(unit, str)):
+        raise PayloadDecodeError(None, None, "a non-empty string channel and a string unit",
+                                 f"{_short_repr(channel)}, {_short_repr(unit)}")
+    first = _uint64("first_sample_index", doc["first_sample_index"])
+    stamp = _uint64("stamp_ns", doc["stamp_ns"])
+    rate = _float("sample_rate_Hz", doc["sample_rate_Hz"])
+    values = _json_values(doc["values"])
+    return _checked_batch(channel, unit, rate, first, stamp, values)
 
 
 def decode_slow_value_json(data: bytes | memoryview) -> SlowValue:
     """Decode a JSON ``rigtools.SlowValue`` (see :data:`SLOW_VALUE_SCHEMA`).
 
+    Exactly the four fields: a non-empty string ``name``, a string ``unit``, an integer
+    ``stamp_ns`` (uint64) and a number ``value`` (NaN and Infinity tokens allowed).
+
     Raises
     ------
     PayloadDecodeError
-        Not JSON, not an object, a field missing or of the wrong type.
+        Not JSON (or nested too deeply), not an object, a field missing, extra or of the
+        wrong type, or a value beyond the float range.
     """
-    doc = _json_object(data)
-    name, unit = doc.get("name"), doc.get("unit")
+    doc = _json_object(data, _SLOW_VALUE_KEYS, "SlowValue")
+    name, unit = doc["name"], doc["unit"]
     if not (isinstance(name, str) and name and isinstance(unit, str)):
-        raise PayloadDecodeError(None, None, "string name and unit", f"{name!r}, {unit!r}")
-    stamp = _uint64("stamp_ns", doc.get("stamp_ns"))
-    value = _number("value", doc.get("value"))
-    return SlowValue(name, unit, stamp, float(value))
+        raise PayloadDecodeError(None, None, "string name and unit",
+                                 f"{_short_repr(name)}, {_short_repr(unit)}")
+    stamp = _uint64("stamp_ns", doc["stamp_ns"])
+    value = _float("value", doc["value"])
+    return SlowValue(name, unit, stamp, value)
 
 
 # --------------------------------------------------------------------------------------
@@ -1175,7 +1243,7 @@ def message_stamp_ns(obj: Any) -> int | None:
     try:
         stamp = get_field(obj, "header.stamp")
         return int(get_field(stamp, "sec")) * 1_000_000_000 + int(get_field(stamp, "nanosec"))
-    except (KeyError, TypeError, ValueError):
+    except (KeyError, TypeError, ValueError, OverflowError):
         pass
     try:
         v = get_field(obj, "stamp_ns")

@@ -3,14 +3,15 @@
 The ingest (:func:`rigtools.ingest.mcap.ingest`) gives each channel one handler, chosen from
 the channel's :class:`~rigtools.ingest.mcap_decoders.Decoder` and the mapping. A handler
 receives the channel's messages block by block (:meth:`ChannelHandler.add`: a
-:class:`~rigtools.ingest.mcap_container.MessageBlock` of the channel's messages of one chunk)
-and hands what it gathered to the :class:`~rigtools.ingest.builder.RecordingBuilder`, per
-block or at the end of the file (:meth:`ChannelHandler.finish`).
+:class:`~rigtools.ingest.mcap_container.MessageBlock` of the channel's messages of one chunk),
+decodes them as they come and hands what it gathered to the
+:class:`~rigtools.ingest.builder.RecordingBuilder` at the end of the file
+(:meth:`ChannelHandler.finish`), once names and time bases can be settled over the whole file.
 
 ==========================  =====================================================  ===========
 handler                     what it makes                                          when
 ==========================  =====================================================  ===========
-:class:`BatchHandler`       a uniform channel indexed by the batches' counters     per block
+:class:`BatchHandler`       a uniform channel indexed by the batches' counters     at the end
 :class:`ImuHandler`         ``<topic>/linear_acceleration.x|y|z`` (m/s^2)          at the end
 :class:`SlowValueHandler`   slow signals named by the payload or the mapping       at the end
 :class:`ScalarHandler`      a slow signal named after the topic                    at the end
@@ -18,7 +19,22 @@ handler                     what it makes                                       
 :class:`RejectHandler`      nothing: counts every message under one reason         per block
 ==========================  =====================================================  ===========
 
-A payload that does not decode is counted as ``decode_error``; the channel goes on.
+A payload that does not decode is counted as ``decode_error`` (first position: the chunk and
+the message record's offset in it), and the channel goes on. Besides, the handlers count
+
+=====================  ======================================================================
+reason                 what happened
+=====================  ======================================================================
+``empty_batch``        an AccelBatch with no values (it carries nothing to place)
+``missing_field``      a message lacks a field the mapping names (the field is in others)
+``no_sample_rate``     too few distinct Imu stamps to estimate a rate
+``inconsistent_unit``  a slow point in another unit than the earlier points of its signal
+=====================  ======================================================================
+
+AccelBatch channels named alike on several topics are kept apart as ``<channel>@<topic>``;
+a counter that restarts is resynchronised from the stamps
+(:func:`~rigtools.ingest.mcap_timing.resync_counter_restarts`); Imu messages are laid on a
+grid fitted to their stamps (:func:`~rigtools.ingest.mcap_timing.stamp_grid`).
 """
 
 from __future__ import annotations
@@ -41,7 +57,12 @@ from rigtools.ingest.mcap_decoders import (
     get_field,
     message_stamp_ns,
 )
-from rigtools.ingest.mcap_records import ChannelRecord
+from rigtools.ingest.mcap_records import (
+    MESSAGE_HEADER_BYTES,
+    RECORD_HEADER_BYTES,
+    ChannelRecord,
+)
+from rigtools.ingest.mcap_timing import estimate_rate, resync_counter_restarts, stamp_grid
 from rigtools.ingest.recording import IngestReport
 from rigtools.ingest.timebase import indices_from_stamps
 
@@ -58,6 +79,7 @@ __all__ = [
     "ScalarHandler",
     "SlowValueHandler",
     "estimate_rate",
+    "message_position",
 ]
 
 
@@ -127,6 +149,24 @@ class RejectHandler(ChannelHandler):
         self.ctx.report.reject(self.reason, len(block), block.where)
 
 
+#: Bytes of a Message record ahead of its payload (record header and message header).
+_PAYLOAD_OFFSET = RECORD_HEADER_BYTES + MESSAGE_HEADER_BYTES
+#: Restarts warned about one by one, per channel; the rest are summed up.
+_MAX_RESTART_WARNINGS = 5
+
+
+def message_position(where: str, i: int, m: ScannedMessage) -> str:
+    """Where message ``m`` (the ``i``-th of a block found at ``where``) lies, for tallies.
+
+    ``"chunk at byte 1234 +567"`` (the chunk's position in the file, the message record's
+    offset in its uncompressed records) for a chunk's message; for messages found outside
+    chunks, the block's position and the message's rank in it.
+    """
+    if m[5] >= 0:
+        return f"chunk at {where} +{m[5] - _PAYLOAD_OFFSET}"
+    return f"{where}, message {i + 1} from there"
+
+
 class DecodingHandler(ChannelHandler):
     """A handler that decodes each payload with its channel's decoder."""
 
@@ -134,23 +174,28 @@ class DecodingHandler(ChannelHandler):
         super().__init__(ctx, channel)
         self.decode = decoder.decode
 
-    def _decoded(self, block: MessageBlock) -> Iterator[tuple[ScannedMessage, Any]]:
-        """Each message with its decoded payload; one that does not decode is counted."""
+    def _decoded(self, block: MessageBlock) -> Iterator[tuple[int, ScannedMessage, Any]]:
+        """Each message (rank in the block, message, decoded payload); failures are counted.
+
+        Besides :class:`PayloadDecodeError`, a payload whose numbers overflow or whose
+        nesting exhausts the recursion limit counts as ``decode_error``: no such exception
+        leaves the reader.
+        """
         decode = self.decode
-        where = block.where
-        for m in block.messages():
+        for i, m in enumerate(block.messages()):
             try:
                 payload = decode(m[4])
-            except PayloadDecodeError as exc:
-                self._decode_error(exc, where)
+            except (PayloadDecodeError, OverflowError, RecursionError) as exc:
+                self._decode_error(exc, message_position(block.where, i, m))
                 continue
-            yield m, payload
+            yield i, m, payload
 
     def _decode_error(self, exc: Exception, where: str) -> None:
         self.ctx.report.reject("decode_error", 1, where)
         self.ctx.warn_once("decode_error", self.channel.id,
                            f"{self.ctx.path}: topic {self.channel.topic!r}: payload does not "
-                           f"decode ({exc}); such messages are counted as decode_error")
+                           f"decode ({exc}) at {where}; such messages are counted as "
+                           "decode_error")
 
 
 @dataclass
@@ -171,10 +216,17 @@ MIN_SLAB_VALUES = 1 << 16
 
 #: 2-D blocks for the builder: row counters (int64), float32 rows, row stamps (ns, uint64).
 _Blocks = list[tuple[np.ndarray, np.ndarray, np.ndarray]]
+#: What the payloads of a batch name: channel, unit, rate.
+_BatchKey = tuple[str, str, float]
 
 
 class BatchHandler(DecodingHandler):
     """rigtools.AccelBatch: the sample counter gives the index; one builder block per chunk.
+
+    The blocks are kept until :meth:`finish` (the builder would keep them as long): only
+    then are the channel names known to be unique across topics
+    (:meth:`rename_shared`) and a counter restart can be told from a late or corrupt batch
+    by the batches after it.
 
     Parameters
     ----------
@@ -194,6 +246,8 @@ class BatchHandler(DecodingHandler):
         self.rate_warned = False
         self._slab: np.ndarray | None = None
         self._slab_used = 0
+        self._blocks: list[tuple[_BatchKey, np.ndarray, np.ndarray, np.ndarray]] = []
+        self._renamed: dict[str, str] = {}
 
     def _values_out(self, m: int, k: int) -> np.ndarray:
         """Room for ``m`` rows of ``k`` float32 values, cut from the channel's current slab.
@@ -216,19 +270,22 @@ class BatchHandler(DecodingHandler):
         return out
 
     def add(self, block: MessageBlock) -> None:
-        """Decode a block (all at once when it allows) and hand it to the builder."""
+        """Decode a block (all at once when it allows) and keep it for :meth:`finish`."""
         if block.buf is not None and block.start is not None and block.end is not None \
                 and self.decode_many is not None and len(block) > 1:
             cols: AccelBatchColumns | None = self.decode_many(block.buf, block.start, block.end,
                                                               self._values_out)
             if cols is not None:
                 self.ctx.report.decoded += len(block)
-                self._flush(cols.channel, cols.unit, cols.sample_rate_Hz,
-                            [(cols.first_sample_index, cols.values, cols.stamp_ns)])
+                self._keep((cols.channel, cols.unit, cols.sample_rate_Hz),
+                           [(cols.first_sample_index, cols.values, cols.stamp_ns)])
                 return
-        accs: dict[tuple[str, str, float], _BatchAcc] = {}
+        accs: dict[_BatchKey, _BatchAcc] = {}
         n_ok = 0
-        for _m, b in self._decoded(block):
+        for i, m, b in self._decoded(block):
+            if b.values.shape[0] == 0:
+                self.ctx.report.reject("empty_batch", 1, message_position(block.where, i, m))
+                continue
             n_ok += 1
             key = (b.channel, b.unit, b.sample_rate_Hz)
             acc = accs.get(key)
@@ -239,34 +296,101 @@ class BatchHandler(DecodingHandler):
             acc.counts.append(b.values.shape[0])
             acc.values.append(b.values)
         self.ctx.report.decoded += n_ok
-        for (name, unit, rate), acc in accs.items():
+        for key, acc in accs.items():
             blocks = _equal_width_runs(acc)
             acc.values.clear()
-            self._flush(name, unit, rate, blocks)
+            self._keep(key, blocks)
 
-    def _flush(self, name: str, unit: str, rate: float, blocks: _Blocks) -> None:
-        """Hand 2-D blocks (row counters, float32 rows, row stamps in ns) to the builder."""
+    def _keep(self, key: _BatchKey, blocks: _Blocks) -> None:
         spec = self.spec
-        conversion: tuple[tuple[float, float], ...] = ()
-        if spec is not None:
-            if not self.rate_warned and not math.isclose(rate, spec.sample_rate_Hz,
-                                                         rel_tol=1e-9):
-                self.rate_warned = True
-                self.ctx.report.warn(f"topic {self.channel.topic!r}: batches state "
-                                     f"{rate} Hz, the mapping {spec.sample_rate_Hz} Hz; the "
-                                     "mapping's rate is used")
-            name, rate = spec.channel, spec.sample_rate_Hz
-            unit = spec.unit if spec.unit is not None else unit
-            if spec.scale != 1.0 or spec.offset != 0.0:
-                conversion = ((spec.scale, spec.offset),)
-        elif not name:
-            name = self.channel.topic.lstrip("/") or f"channel_{self.channel.id}"
+        if spec is not None and not self.rate_warned and \
+                not math.isclose(key[2], spec.sample_rate_Hz, rel_tol=1e-9):
+            self.rate_warned = True
+            self.ctx.report.warn(f"topic {self.channel.topic!r}: batches state "
+                                 f"{key[2]} Hz, the mapping {spec.sample_rate_Hz} Hz; the "
+                                 "mapping's rate is used")
         for starts, values, stamps_ns in blocks:
+            self._blocks.append((key, starts, values, stamps_ns))
+
+    def _name(self, key: _BatchKey) -> str:
+        """The channel a batch goes to, before :meth:`rename_shared`."""
+        if self.spec is not None:
+            return self.spec.channel
+        return key[0] or self.channel.topic.lstrip("/") or f"channel_{self.channel.id}"
+
+    def channel_names(self) -> set[str]:
+        """The channels the payloads name (the mapping's, when it has an entry)."""
+        return {self._name(key) for key in dict.fromkeys(b[0] for b in self._blocks)}
+
+    def rename_shared(self, shared: set[str]) -> None:
+        """Send the payload-named channels in ``shared`` to ``<channel>@<topic>``.
+
+        ``shared``: names that payloads on other topics give too. A mapping's channel names
+        stay as the mapping says.
+        """
+        if self.spec is None:
+            self._renamed = {name: f"{name}@{self.channel.topic}"
+                             for name in self.channel_names() & shared}
+
+    def finish(self) -> None:
+        """Resynchronise counter restarts and hand every block to the builder."""
+        if not self._blocks:
+            return
+        spec = self.spec
+        by_key: dict[_BatchKey, list[int]] = {}
+        for bi, (key, *_rest) in enumerate(self._blocks):
+            by_key.setdefault(key, []).append(bi)
+        for key, bis in by_key.items():
+            self._resync(key, bis)
+        conversion: tuple[tuple[float, float], ...] = ()
+        if spec is not None and (spec.scale != 1.0 or spec.offset != 0.0):
+            conversion = ((spec.scale, spec.offset),)
+        blocks, self._blocks = self._blocks, []
+        for key, starts, values, stamps_ns in blocks:
+            name = self._name(key)
+            name = self._renamed.get(name, name)
+            unit, rate = key[1], key[2]
+            if spec is not None:
+                rate = spec.sample_rate_Hz
+                unit = spec.unit if spec.unit is not None else unit
             # the stamp of values[0] of each row, on the row's counter: places index 0 on the
             # logger clock (the builder drops both if the block's unit or rate differ)
             self.ctx.builder.add_samples(name, unit, rate, starts, values, stamp_index=starts,
                                          stamps_s=stamps_ns.astype(np.float64) * 1e-9,
                                          conversion=conversion)
+
+    def _resync(self, key: _BatchKey, bis: list[int]) -> None:
+        """Find counter restarts among the rows of one payload channel and move them."""
+        parts = [self._blocks[bi] for bi in bis]
+        starts = np.concatenate([p[1] for p in parts]) if len(parts) > 1 else parts[0][1]
+        stamps = np.concatenate([p[3] for p in parts]) if len(parts) > 1 else parts[0][3]
+        rate = self.spec.sample_rate_Hz if self.spec is not None else key[2]
+        if starts.shape[0] < 2:
+            return
+        widths = np.concatenate([np.full(p[1].shape[0], p[2].shape[1], np.int64)
+                                 for p in parts])
+        new, restarts = resync_counter_restarts(starts, stamps, widths, rate)
+        if not restarts:
+            return
+        name = self._name(key)
+        name = self._renamed.get(name, name)
+        lo = 0
+        for bi, p in zip(bis, parts, strict=True):
+            m = p[1].shape[0]
+            self._blocks[bi] = (p[0], new[lo : lo + m], p[2], p[3])
+            lo += m
+        for r in restarts:
+            self.ctx.builder.mark_restart(name, r.index)
+        for r in restarts[:_MAX_RESTART_WARNINGS]:
+            self.ctx.report.warn(
+                f"{self.ctx.path}: topic {self.channel.topic!r}, channel {name!r}: the sample "
+                f"counter went back to {r.counter} (after index {r.previous_index}) while the "
+                f"stamps went on (stamp_ns {r.stamp_ns}): a counter restart, resynchronised "
+                f"from the stamps to continue at index {r.index}; no sample dropped")
+        if len(restarts) > _MAX_RESTART_WARNINGS:
+            self.ctx.report.warn(
+                f"{self.ctx.path}: topic {self.channel.topic!r}, channel {name!r}: "
+                f"{len(restarts)} counter restarts in all, each resynchronised from the stamps")
 
 
 def _equal_width_runs(acc: _BatchAcc) -> _Blocks:
@@ -293,8 +417,11 @@ def _equal_width_runs(acc: _BatchAcc) -> _Blocks:
 class ImuHandler(DecodingHandler):
     """sensor_msgs/msg/Imu: three channels ``<topic>/linear_acceleration.x|y|z`` (m/s^2).
 
-    The sample rate is estimated from the header stamps (:func:`estimate_rate`), which place
-    each sample on the grid; the MCAP log times stand in when every header stamp is zero.
+    The header stamps (the MCAP log times when every header stamp is zero) give the rate
+    and each sample's index: :func:`~rigtools.ingest.mcap_timing.stamp_grid` fits a grid
+    to them, tolerant of stamp jitter (the message order when no message is missing, a
+    fitted grid otherwise), and the rate is the fitted one, snapped to a value of 3
+    significant digits only when within 0.1 %.
     """
 
     def __init__(self, ctx: HandlerContext, channel: ChannelRecord, decoder: Decoder) -> None:
@@ -306,13 +433,13 @@ class ImuHandler(DecodingHandler):
         """Collect header stamps and accelerations."""
         rows, logs = self.rows, self.log_times
         n0 = len(rows)
-        for m, sample in self._decoded(block):
+        for _i, m, sample in self._decoded(block):
             rows.append(sample)
             logs.append(m[2])
         self.ctx.report.decoded += len(rows) - n0
 
     def finish(self) -> None:
-        """Hand the three axes to the builder, on the grid of the estimated rate."""
+        """Hand the three axes to the builder, on the grid fitted to the stamps."""
         if not self.rows:
             return
         topic = self.channel.topic
@@ -321,50 +448,28 @@ class ImuHandler(DecodingHandler):
         if not np.any(stamps_ns):
             self.ctx.report.warn(f"topic {topic!r}: Imu header stamps are all zero; the "
                                  "MCAP log times are used instead")
-            stamps_ns = np.asarray(self.log_times, np.int64)
+            stamps_ns = np.asarray(self.log_times, np.uint64).astype(np.int64)
         t = stamps_ns.astype(np.float64) * 1e-9
-        rate = estimate_rate(np.sort(stamps_ns))
-        if rate is None:
+        grid = stamp_grid(stamps_ns)
+        if grid is None:
             self.ctx.report.reject("no_sample_rate", len(self.rows), f"topic {topic!r}")
             self.ctx.report.warn(f"topic {topic!r}: too few distinct Imu stamps to estimate "
                                  "a sample rate; give it in a mapping")
             return
+        rate = grid.sample_rate_Hz
+        how = ("the stamps against the message order (no message missing)"
+               if grid.method == "order" else "a grid fitted to the stamps")
         self.ctx.report.warn(
-            f"topic {topic!r}: sample rate {rate:g} Hz estimated from the median Imu header "
-            "stamp interval; give sample_rate_Hz in a mapping to fix it"
+            f"topic {topic!r}: sample rate {rate:g} Hz estimated from {how} (fitted "
+            f"{grid.fitted_rate_Hz:.6g} Hz); give sample_rate_Hz in a mapping to fix it"
         )
-        index = indices_from_stamps(t, rate)
-        index -= index.min()
+        if grid.n_moved:
+            self.ctx.report.warn(f"topic {topic!r}: {grid.n_moved} Imu sample(s) jittered into "
+                                 "the slot of another and were moved to the free slot beside")
+        index = grid.index
         for k, axis in enumerate("xyz", start=1):
             self.ctx.builder.add_samples(f"{topic}/linear_acceleration.{axis}", "m/s^2", rate,
                                          index, arr[:, k], stamp_index=index, stamps_s=t)
-
-
-def estimate_rate(sorted_stamps_ns: np.ndarray) -> float | None:
-    """Sample rate (Hz) from stamps: 1 / the median positive interval, to 3 significant digits.
-
-    Parameters
-    ----------
-    sorted_stamps_ns : numpy.ndarray
-        Stamps in ascending order (ns).
-
-    Returns
-    -------
-    float or None
-        None when no two stamps differ.
-
-    Examples
-    --------
-    >>> estimate_rate(np.array([0, 2_500_000, 5_000_000, 7_600_000]))
-    400.0
-    """
-    d = np.diff(sorted_stamps_ns)
-    d = d[d > 0]
-    if d.size == 0:
-        return None
-    fs = 1e9 / float(np.median(d))
-    digits = 2 - math.floor(math.log10(fs))
-    return float(round(fs, digits))
 
 
 class SlowValueHandler(DecodingHandler):
@@ -389,15 +494,15 @@ class SlowValueHandler(DecodingHandler):
     def add(self, block: MessageBlock) -> None:
         """Collect points by signal; a point in another unit than its signal's is counted."""
         spec = self.spec
-        where = block.where
-        for _m, p in self._decoded(block):
+        for i, m, p in self._decoded(block):
             name = spec.name if spec is not None else p.name
             unit = spec.unit if spec is not None and spec.unit is not None else p.unit
             entry = self.points.get(name)
             if entry is None:
                 entry = self.points[name] = (unit, [], [])
             elif entry[0] != unit:
-                self.ctx.report.reject("inconsistent_unit", 1, where)
+                self.ctx.report.reject("inconsistent_unit", 1,
+                                       message_position(block.where, i, m))
                 self.ctx.warn_once("inconsistent_unit", name, f"slow signal {name!r}: a point "
                                    f"in {unit!r} after points in {entry[0]!r}; not used")
                 continue
@@ -410,7 +515,8 @@ class SlowValueHandler(DecodingHandler):
         for name, (unit, stamps, values) in self.points.items():
             v = np.asarray(values, np.float64)
             if self.spec is not None:
-                v = v * self.spec.scale + self.spec.offset
+                with np.errstate(over="ignore", invalid="ignore"):  # Inf kept as received
+                    v = v * self.spec.scale + self.spec.offset
             self.ctx.builder.add_slow(name, unit, np.asarray(stamps, np.float64) * 1e-9, v)
 
 
@@ -427,7 +533,7 @@ class ScalarHandler(DecodingHandler):
 
     def add(self, block: MessageBlock) -> None:
         """Collect log times and values."""
-        for m, value in self._decoded(block):
+        for _i, m, value in self._decoded(block):
             self.v.append(value)
             self.t.append(m[2])
             self.ctx.report.decoded += 1
@@ -441,8 +547,35 @@ class ScalarHandler(DecodingHandler):
                                       np.asarray(self.v, np.float64))
 
 
+def _numeric(value: Any) -> np.ndarray | None:
+    """``value`` as a flat float64 array when it is a number or an array of numbers."""
+    if isinstance(value, str | bytes):
+        return None
+    try:
+        arr = np.asarray(value)
+    except (TypeError, ValueError, OverflowError, RecursionError):
+        return None
+    if arr.dtype.kind not in "biuf":  # strings, objects (nested messages, huge integers)
+        return None
+    return arr.astype(np.float64).ravel()
+
+
+@dataclass
+class _FieldTally:
+    """What the messages of a topic held under one mapped field."""
+
+    found: int = 0  # messages that have the field
+    usable: int = 0  # ... and a value of the kind the entry needs
+    missing: str = ""  # the first "no field" text
+    unusable: str = ""  # the first unusable value
+
+
 class MappedHandler(DecodingHandler):
     """Any decodable message: the mapping's dotted fields become uniform or slow signals.
+
+    A message that lacks one of the mapped fields is counted ``missing_field``, one whose
+    field is not numeric (or not a scalar, for a slow signal) ``decode_error``, each with its
+    position; the other messages are read.
 
     Parameters
     ----------
@@ -456,8 +589,9 @@ class MappedHandler(DecodingHandler):
     Raises
     ------
     MappingError
-        From :meth:`add` or :meth:`finish`: a field path the messages do not have, a
-        non-numeric field, or an array field mapped to a slow signal.
+        From :meth:`finish`: a field path none of the topic's messages has, or whose value
+        is in none of them numeric (a scalar, for a slow signal); it names the mapping, the
+        recording and the topic.
     """
 
     def __init__(self, ctx: HandlerContext, channel: ChannelRecord, decoder: Decoder,
@@ -465,47 +599,73 @@ class MappedHandler(DecodingHandler):
         super().__init__(ctx, channel, decoder)
         self.specs = specs
         self.stamps: list[int] = []
-        self.cols: list[list[Any]] = [[] for _ in specs]
+        self.cols: list[list[np.ndarray]] = [[] for _ in specs]
+        self.tally = [_FieldTally() for _ in specs]
+        self.n_payloads = 0
 
     def add(self, block: MessageBlock) -> None:
         """Collect each mapped field and the message's stamp (header stamp, else log time)."""
-        for m, obj in self._decoded(block):
-            row = []
-            for spec in self.specs:
+        for i, m, obj in self._decoded(block):
+            self.n_payloads += 1
+            row: list[np.ndarray] = []
+            reason = ""
+            for spec, tally in zip(self.specs, self.tally, strict=True):
                 try:
-                    row.append(get_field(obj, spec.field or ""))
+                    raw = get_field(obj, spec.field or "")
                 except KeyError as exc:
-                    raise MappingError(self.ctx.mapping_source, f"topic {self.channel.topic!r}",
-                                       "a field path that exists in the messages",
-                                       repr(spec.field), str(exc)) from None
+                    tally.missing = tally.missing or str(exc).strip("'\"")
+                    reason = reason or "missing_field"
+                    continue
+                tally.found += 1
+                arr = _numeric(raw)
+                if arr is None or (isinstance(spec, SlowSpec) and arr.size != 1):
+                    tally.unusable = tally.unusable or _short(raw)
+                    reason = reason or "decode_error"
+                    continue
+                tally.usable += 1
+                row.append(arr)
+            if reason:
+                where = message_position(block.where, i, m)
+                self.ctx.report.reject(reason, 1, where)
+                self.ctx.warn_once(reason, self.channel.id, f"{self.ctx.path}: topic "
+                                   f"{self.channel.topic!r}: a message at {where} lacks a "
+                                   "mapped field or holds no number there; such messages are "
+                                   f"counted as {reason}")
+                continue
             stamp = message_stamp_ns(obj)
             self.stamps.append(m[2] if stamp is None else stamp)
             for col, val in zip(self.cols, row, strict=True):
                 col.append(val)
             self.ctx.report.decoded += 1
 
-    def _numbers(self, spec: UniformSpec | SlowSpec, vals: list[Any]) -> list[np.ndarray]:
-        try:
-            out = [np.asarray(v, np.float64).ravel() for v in vals]
-        except (TypeError, ValueError):
-            raise MappingError(self.ctx.mapping_source, f"topic {self.channel.topic!r}",
-                               "a numeric field", f"{spec.field!r} = {vals[0]!r}") from None
-        return out
+    def _check(self) -> None:
+        """Refuse a mapping whose field no message of the topic has (or holds usably)."""
+        where = f"topic {self.channel.topic!r} of {self.ctx.path}"
+        for spec, tally in zip(self.specs, self.tally, strict=True):
+            if self.n_payloads and not tally.found:
+                raise MappingError(self.ctx.mapping_source, where,
+                                   "a field path that exists in the messages", repr(spec.field),
+                                   f"none of the {self.n_payloads} decoded messages has it "
+                                   f"({tally.missing})")
+            if tally.found and not tally.usable:
+                what = "a scalar numeric field for a slow signal" \
+                    if isinstance(spec, SlowSpec) else "a numeric field"
+                raise MappingError(self.ctx.mapping_source, where, what,
+                                   f"{spec.field!r} = {tally.unusable}",
+                                   f"in all {tally.found} messages that have it")
 
     def finish(self) -> None:
         """Hand each mapped field to the builder as the signal its entry names."""
+        self._check()
         if not self.stamps:
             return
         t = np.asarray(self.stamps, np.float64) * 1e-9
-        for spec, vals in zip(self.specs, self.cols, strict=True):
-            arrays = self._numbers(spec, vals)
+        for spec, arrays in zip(self.specs, self.cols, strict=True):
             unit = spec.unit if spec.unit is not None else self.channel.metadata.get("unit", "")
+            with np.errstate(over="ignore", invalid="ignore"):  # Inf kept, counted later
+                values = np.concatenate(arrays) * spec.scale + spec.offset
             if isinstance(spec, SlowSpec):
-                if any(a.size != 1 for a in arrays):
-                    raise MappingError(self.ctx.mapping_source, f"topic {self.channel.topic!r}",
-                                       "a scalar field for a slow signal", repr(spec.field))
-                v = np.concatenate(arrays) * spec.scale + spec.offset
-                self.ctx.builder.add_slow(spec.name, unit, t, v)
+                self.ctx.builder.add_slow(spec.name, unit, t, values)
                 continue
             rate = spec.sample_rate_Hz
             counts = np.asarray([a.size for a in arrays], np.int64)
@@ -514,7 +674,14 @@ class MappedHandler(DecodingHandler):
             starts = np.cumsum(counts) - counts
             index = np.arange(int(counts.sum()), dtype=np.int64)
             index += np.repeat(idx0 - starts, counts)
-            values = np.concatenate(arrays) * spec.scale + spec.offset
             keep = counts > 0
             self.ctx.builder.add_samples(spec.channel, unit, rate, index, values,
                                          stamp_index=idx0[keep], stamps_s=t[keep])
+
+
+def _short(value: Any, limit: int = 40) -> str:
+    try:
+        text = repr(value)
+    except RecursionError:
+        return "a deeply nested value"
+    return text if len(text) <= limit else text[: limit - 3] + "..."

@@ -435,7 +435,8 @@ def test_batches_of_varying_length_and_empty_batches(tmp_path):
     b = [(0, [0, 1, 2]), (3, []), (3, [3, 4, 5, 6, 7]), (8, [8])]
     rec = read(_write_batches(tmp_path / "v.mcap", b))
     assert rec.channels["a"].values.tolist() == list(range(9))
-    assert rec.report.decoded == 4
+    assert rec.report.decoded == 3 and rec.report.rejected == {"empty_batch": 1}
+    assert rec.report.first_position["empty_batch"].startswith("chunk at byte ")
 
 
 def test_non_finite_samples_are_kept_marked_invalid_and_counted(tmp_path):

@@ -121,3 +121,10 @@ def test_user_gear_set_with_an_unknown_key_names_file_and_key(tmp_path):
         load_gear_set(p)
     assert json.dumps(iter_errors(tomllib.loads(p.read_text()), "gear_set.schema.json"))
 
+
+
+def test_centre_distance_below_zero_backlash_is_refused():
+    # FZG-C shifts need 91.499 mm; at 91.0 mm the teeth would overlap (reviewer's case).
+    with pytest.raises(GeometryError, match=r"`centre_distance_m`.*teeth would overlap"):
+        GearPair(Gear(16, 0.182, tip_diameter_m=82.46e-3), Gear(24, 0.171,
+                 tip_diameter_m=118.36e-3), 4.5e-3, 20 * DEG, 14e-3, centre_distance_m=91.0e-3)

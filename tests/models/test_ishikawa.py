@@ -546,3 +546,25 @@ def test_normal_load_is_torque_over_base_radius_and_the_seed_form_is_1_7_percent
     ratio = float(normal_load_seed_000(FZG, T_SEED)) / F
     assert ratio == pytest.approx(math.cos(20 * DEG) / math.cos(22.439 * DEG), rel=1e-4)
     assert 0.016 < ratio - 1 < 0.017
+
+
+@pytest.mark.parametrize(
+    "pair_args",
+    [  # pairs the reviewer found refused: the load line crosses the centreline below the root
+        ((60, 0.0), (60, 0.0), 25.0),
+        ((88, -0.2), (124, 0.18), 20.0),
+    ],
+)
+def test_load_below_the_root_is_taken_at_the_root_not_refused(pair_args):
+    import math
+
+    from models.geometry import Gear, GearPair
+    from models.stiffness import equivalent_tooth, tooth_pair_stiffness
+
+    (z1, x1), (z2, x2), alpha = pair_args
+    g = GearPair(Gear(z1, x1), Gear(z2, x2), 3e-3, math.radians(alpha), 20e-3)
+    k = tooth_pair_stiffness(g)
+    assert np.all(np.isfinite(k.k_EP_N_per_m)) and np.all(k.k_EP_N_per_m > 0)
+    clamped = [equivalent_tooth(g, gear, np.linspace(g.start_of_contact, g.end_of_contact, 52))
+               .load_clamped.any() for gear in (1, 2)]
+    assert any(clamped)

@@ -320,12 +320,14 @@ def test_temperature_stiffness_units_series_and_sum():
 def test_temperature_stiffness_limits():
     sig = np.array([0.0, 1e-9, 1e-6, 1e-5])
     kw = temperature_stiffness(1000.0, 0.014, sig, sig)
-    # sigma -> 0 diverges (the oddity: a cold pair would be infinitely stiff): inf, no warning.
-    assert np.isinf(kw.pair_N_m[0]) and np.all(np.isfinite(kw.pair_N_m[1:]))
+    # sigma -> 0 diverges (the oddity: a cold pair would be infinitely stiff): never an
+    # infinite stiffness, NaN flagged as undefined, no warning.
+    assert np.isnan(kw.pair_N_m[0]) and np.all(np.isfinite(kw.pair_N_m[1:]))
+    assert kw.undefined.tolist() == [True, False, False, False]
     assert np.all(np.diff(kw.pair_N_m[1:]) < 0)
     # One rigid thermal "spring" leaves the other one.
     one = temperature_stiffness(1000.0, 0.014, 0.0, 2e-6)
-    assert np.isinf(one.tooth_pinion_N_m2)
+    assert np.isnan(one.tooth_pinion_N_m2) and not bool(one.undefined)
     assert float(one.pair_N_m2) == pytest.approx(float(one.tooth_wheel_N_m2))
     # Load over a thermal deformation grows with the load at a fixed temperature.
     lin = temperature_stiffness([1000.0, 2000.0], 0.014, 2e-6, 2e-6)
