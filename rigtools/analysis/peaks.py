@@ -1,4 +1,4 @@
-"""Natural frequencies with damping from a PSD, told apart from mesh harmonics and sidebands.
+r"""Natural frequencies with damping from a PSD, told apart from mesh harmonics and sidebands.
 
 For each peak of a Welch PSD (:class:`~rigtools.analysis.spectra.Spectrum`):
 
@@ -7,27 +7,28 @@ For each peak of a Welch PSD (:class:`~rigtools.analysis.spectra.Spectrum`):
    deviations of the estimator's own log scatter.
 2. **Frequency** finer than a bin: Gaussian interpolation (a parabola through the log PSD of
    the three bins around the maximum).
-3. **Location class**: a peak within tolerance of :math:`k f_\\text{mesh}`,
-   :math:`k f_\\text{mesh} \\pm j f_\\text{shaft}` or :math:`k f_\\text{shaft}` is a mesh
+3. **Location class**: a peak within tolerance of :math:`k f_\text{mesh}`,
+   :math:`k f_\text{mesh} \pm j f_\text{shaft}` or :math:`k f_\text{shaft}` is a mesh
    harmonic, a mesh sideband or a shaft harmonic (in that order of precedence).
 4. **Damping**, two ways, each with a standard uncertainty:
 
-   * half-power bandwidth, :math:`\\zeta = (f_2 - f_1) / (2 f_\\text{peak})` where the PSD has
+   * half-power bandwidth, :math:`\zeta = (f_2 - f_1) / (2 f_\text{peak})` where the PSD has
      fallen to half its peak, with the uncertainty propagated from the chi-square scatter
-     of the Welch estimates (:math:`\\nu` equivalent degrees of freedom,
-     :math:`\\mathrm{Var}\\ln\\hat S = \\psi'(\\nu/2)`) through the local slopes;
+     of the Welch estimates (:math:`\nu` equivalent degrees of freedom,
+     :math:`\mathrm{Var}\ln\hat S = \psi'(\nu/2)`) through the local slopes;
    * a single-DOF fit: :math:`|H|^2` of a SDOF plus a white background, convolved with the
      window's spectral window (the expected value of a Welch estimate), fitted to the log PSD
      around the peak by :func:`scipy.optimize.least_squares`; covariance from the Jacobian,
-     :math:`(J^TJ)^{-1} J^T \\Sigma J (J^TJ)^{-1}` with :math:`\\Sigma = \\psi'(\\nu/2) R`,
+     :math:`(J^TJ)^{-1} J^T \Sigma J (J^TJ)^{-1}` with :math:`\Sigma = \psi'(\nu/2) R`,
      R the correlation of neighbouring Welch bins (sandwich form), scaled up by the reduced
      chi-square when the model fits worse than the estimator's scatter.
 
 5. **Kind**: ``"structural"`` for a peak not at those frequencies whose fitted damping is
-   wider than the spectral resolution can show (:math:`\\zeta > \\zeta_\\text{res} =
-   B_\\text{3dB} / (2 f)`, with :math:`B_\\text{3dB}` the window's half-power bandwidth: a pure
-   tone appears that wide), ``"tonal"`` for a narrow peak at none of them, ``"unresolved"``
-   when the fit fails.
+   wider than the spectral resolution can show (:math:`\zeta > \zeta_\text{res} =
+   B_\text{3dB} / (2 f)`, with :math:`B_\text{3dB}` the window's half-power bandwidth: a pure
+   tone appears that wide), ``"tonal"`` for a narrow peak at none of them (fitted damping at
+   or below that, or, when too few bins are free to fit, half-power damping below it),
+   ``"unresolved"`` when the fit fails.
 
 :func:`analyse_recording` runs spectra, RMS, quality checks and peaks over the channels of a
 :class:`~rigtools.ingest.recording.Recording` and returns one :class:`ChannelAnalysis` each.
@@ -119,12 +120,12 @@ MAX_FIT_EVALUATIONS = 100
 
 @dataclass(frozen=True)
 class HalfPower:
-    """Half-power bandwidth damping.
+    r"""Half-power bandwidth damping.
 
     Attributes
     ----------
     zeta : float
-        :math:`(f_2 - f_1) / (2 f_\\text{peak})` (NaN when a crossing is not found).
+        :math:`(f_2 - f_1) / (2 f_\text{peak})` (NaN when a crossing is not found).
     zeta_std : float
         Standard uncertainty of ``zeta`` from the Welch chi-square scatter (see module notes).
     f_lo_Hz, f_hi_Hz : float
@@ -145,12 +146,12 @@ class HalfPower:
 
 @dataclass(frozen=True)
 class SDOFFit:
-    """A single-DOF response fitted to the PSD around a peak.
+    r"""A single-DOF response fitted to the PSD around a peak.
 
     Model, with :math:`r = f/f_n` and p = 0, 1, 2 for displacement, velocity, acceleration:
 
-    .. math:: E[\\hat S(f_k)] = \\sum_m K_m\\, S_0 \\frac{(2\\zeta)^2 r_m^{2p}}
-              {(1 - r_m^2)^2 + (2\\zeta r_m)^2} + B, \\qquad r_m = (f_k - m\\delta)/f_n,
+    .. math:: E[\hat S(f_k)] = \sum_m K_m\, S_0 \frac{(2\zeta)^2 r_m^{2p}}
+              {(1 - r_m^2)^2 + (2\zeta r_m)^2} + B, \qquad r_m = (f_k - m\delta)/f_n,
 
     :math:`K_m` the window's spectral window (:attr:`WindowProperties.kernel`).
 
@@ -162,7 +163,7 @@ class SDOFFit:
         Damping ratio and its standard uncertainty.
     peak_psd_per_Hz : float
         :math:`S_0`, the SDOF PSD at :math:`f_n` (unit^2/Hz), free of window smoothing
-        (fitted as :math:`\\ln W`, :math:`W = \\pi \\zeta f_n S_0` the mean square under
+        (fitted as :math:`\ln W`, :math:`W = \pi \zeta f_n S_0` the mean square under
         the peak, which stays well conditioned down to a tone).
     background_per_Hz : float
         B (unit^2/Hz).
@@ -171,7 +172,7 @@ class SDOFFit:
     n_bins : int
         Bins fitted (masked bins of nearby mesh lines excluded).
     redchi2 : float
-        Residual variance over the estimator's log variance :math:`\\psi'(\\nu/2)` (about 1
+        Residual variance over the estimator's log variance :math:`\psi'(\nu/2)` (about 1
         when the model fits to the scatter; the covariance is scaled up by it when > 1).
     success : bool
     at_lower_bound : bool
@@ -196,7 +197,7 @@ class SDOFFit:
 
 @dataclass(frozen=True)
 class ModalEstimate:
-    """Natural frequency and damping of one PSD peak, two ways, with uncertainties.
+    r"""Natural frequency and damping of one PSD peak, two ways, with uncertainties.
 
     Attributes
     ----------
@@ -211,7 +212,7 @@ class ModalEstimate:
     psd_peak_per_Hz : float
         Interpolated PSD at the peak (unit^2/Hz).
     zeta_resolution : float
-        :math:`B_\\text{3dB}/(2 f_\\text{peak})`: the damping a pure tone appears to have.
+        :math:`B_\text{3dB}/(2 f_\text{peak})`: the damping a pure tone appears to have.
     fit : SDOFFit
     half_power : HalfPower
     response : str
@@ -351,7 +352,7 @@ def classify_frequency(f_Hz: float, *, mesh_frequency_Hz: float | None,
                        shaft_frequencies_Hz: Sequence[float] = (), tolerance_Hz: float = 0.0,
                        rtol: float = 0.002, max_sideband: int = 3,
                        max_shaft_harmonic: int = 10) -> LocationClass:
-    """Match a frequency to mesh harmonics, their sidebands and shaft harmonics.
+    r"""Match a frequency to mesh harmonics, their sidebands and shaft harmonics.
 
     Parameters
     ----------
@@ -372,7 +373,7 @@ def classify_frequency(f_Hz: float, *, mesh_frequency_Hz: float | None,
     -------
     LocationClass
         The first match in the order mesh harmonic (any k >= 1), mesh sideband
-        (:math:`k f_m \\pm j f_s`, k >= 1, 1 <= j <= max_sideband), shaft harmonic
+        (:math:`k f_m \pm j f_s`, k >= 1, 1 <= j <= max_sideband), shaft harmonic
         (:math:`k f_s`, 1 <= k <= max_shaft_harmonic); the nearest within a class.
 
     Examples
@@ -477,7 +478,7 @@ class _PSDContext:
 
 
 def _smoothed_log(ctx: _PSDContext, mask: np.ndarray, m: int) -> np.ndarray:
-    """ln of the m-bin moving average of the PSD over unmasked bins (NaN where none)."""
+    """Natural log of the m-bin moving average of the PSD over unmasked bins (NaN where none)."""
     if m <= 1:
         return np.where(mask, np.nan, ctx.lnP)
     w = (~mask).astype(np.float64)
@@ -545,7 +546,7 @@ def _half_power(ctx: _PSDContext, k0: int, lo: int, hi: int, mask: np.ndarray) -
     raw = _half_power_pass(ctx, k0, lo, hi, mask, 1)
     if not np.isfinite(raw.zeta):
         return raw
-    m = int(round((raw.f_hi_Hz - raw.f_lo_Hz) / ctx.df / HALF_POWER_SMOOTHING))
+    m = round((raw.f_hi_Hz - raw.f_lo_Hz) / ctx.df / HALF_POWER_SMOOTHING)
     m = min(m + 1 - m % 2, 31)  # odd, at most 31 bins
     if m <= 1:
         return raw
@@ -698,7 +699,7 @@ def half_power_damping(spectrum: Spectrum, f_Hz: float) -> HalfPower:
 
 def fit_sdof(spectrum: Spectrum, f_Hz: float, *, response: Response = "displacement",
              fit_span: float = 5.0, exclude_Hz: Iterable[float] = ()) -> SDOFFit:
-    """Fit a single-DOF response to the PSD around the peak nearest ``f_Hz``.
+    r"""Fit a single-DOF response to the PSD around the peak nearest ``f_Hz``.
 
     Parameters
     ----------
@@ -707,9 +708,9 @@ def fit_sdof(spectrum: Spectrum, f_Hz: float, *, response: Response = "displacem
     f_Hz : float
         Frequency near the peak (Hz).
     response : {'displacement', 'velocity', 'acceleration'}
-        SDOF response measured: the PSD shape :math:`r^{2p}/((1-r^2)^2+(2\\zeta r)^2)`,
-        p = 0, 1, 2. The peak of the displacement form lies at :math:`f_n\\sqrt{1-2\\zeta^2}`,
-        of the acceleration form at :math:`f_n/\\sqrt{1-2\\zeta^2}`.
+        SDOF response measured: the PSD shape :math:`r^{2p}/((1-r^2)^2+(2\zeta r)^2)`,
+        p = 0, 1, 2. The peak of the displacement form lies at :math:`f_n\sqrt{1-2\zeta^2}`,
+        of the acceleration form at :math:`f_n/\sqrt{1-2\zeta^2}`.
     fit_span : float
         Half-width of the fitted band in half-power half-bandwidths (at least 8 bins).
     exclude_Hz : iterable of float
@@ -724,7 +725,7 @@ def fit_sdof(spectrum: Spectrum, f_Hz: float, *, response: Response = "displacem
     k0 = _local_max(ctx, f_Hz)
     mask = np.zeros(ctx.f.size, bool)
     for fx in exclude_Hz:
-        _mask_line(ctx, int(round(fx / ctx.df)), mask)
+        _mask_line(ctx, round(fx / ctx.df), mask)
     mask[k0] = False
     hp = _half_power(ctx, k0, 1, ctx.f.size - 2, mask)
     zres = _zeta_resolution(ctx, ctx.f[k0])
@@ -732,7 +733,7 @@ def fit_sdof(spectrum: Spectrum, f_Hz: float, *, response: Response = "displacem
 
 
 def _local_max(ctx: _PSDContext, f_Hz: float) -> int:
-    k = int(round(float(f_Hz) / ctx.df))
+    k = round(float(f_Hz) / ctx.df)
     if not 1 <= k <= ctx.f.size - 2:
         raise SignalError("f_Hz", f"inside (0, {ctx.f[-1]:g}) Hz", repr(f_Hz))
     a, b = max(1, k - 2), min(ctx.f.size - 2, k + 2)
@@ -765,7 +766,7 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
                   max_peaks: int = 20, tolerance_Hz: float | None = None, rtol: float = 0.002,
                   max_sideband: int = 3, max_shaft_harmonic: int = 10,
                   response: Response = "displacement", fit_span: float = 5.0) -> PeakAnalysis:
-    """Find, locate, classify and damp the peaks of one channel's PSD.
+    r"""Find, locate, classify and damp the peaks of one channel's PSD.
 
     Parameters
     ----------
@@ -779,7 +780,7 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
         Least prominence of a peak on the log PSD (dB).
     min_sigma : float
         Least prominence in standard deviations of the log PSD estimate,
-        :math:`\\sigma_{dB} = 10 \\log_{10}(e) \\sqrt{\\psi'(\\nu/2)}`; the threshold is the larger.
+        :math:`\sigma_{dB} = 10 \log_{10}(e) \sqrt{\psi'(\nu/2)}`; the threshold is the larger.
     f_range_Hz : (float, float), optional
         Band searched (Hz); default from just above the window's main lobe at 0 Hz to
         the Nyquist frequency.
@@ -842,17 +843,15 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
     if mesh_frequency_Hz is not None and mesh_frequency_Hz > 0:
         # mesh harmonics too weak to be detected as peaks still bend a nearby fit
         for fk in np.arange(1, int(f[-1] // mesh_frequency_Hz) + 1) * mesh_frequency_Hz:
-            k = int(round(fk / df))
+            k = round(fk / df)
             if 0 < k < n - 1 and not line_mask[k]:
                 _mask_line(ctx, k + int(np.argmax(lnP[k - 1: k + 2])) - 1, line_mask)
     free = [k for k, *_, loc in located if loc.kind is None]
     peaks = []
     for k, fk, fstd, lnk, loc in located:
-        mask = line_mask.copy()
-        if loc.kind is not None:  # its own line is what is measured: unmask it
-            own = np.zeros(n, bool)
-            _mask_line(ctx, k, own)
-            mask &= ~own
+        own = np.zeros(n, bool)  # the peak itself is what is measured: never masked
+        _mask_line(ctx, k, own)
+        mask = line_mask & ~own
         lo, hi = 1, n - 2
         others = [j for j in free if j != k] if loc.kind is None else [
             j for j, *_ in located if j != k]
@@ -866,10 +865,12 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
             hi = k + int(np.argmin(np.where(mask[k: j + 1], np.inf, lnP[k: j + 1])))
         mode = _estimate(ctx, k, lo, hi, mask, p, fit_span, response,
                          line=loc.kind is not None)
-        z = mode.fit.zeta
+        z, zhp = mode.fit.zeta, mode.zeta_half_power
         if loc.kind is not None:
             kind = loc.kind
         elif np.isfinite(z) and (mode.fit.at_lower_bound or z <= mode.zeta_resolution):
+            kind = "tonal"
+        elif not np.isfinite(z) and zhp <= mode.zeta_resolution:  # too hemmed in to fit
             kind = "tonal"
         elif mode.fit.success:
             kind = "structural"
@@ -1112,7 +1113,10 @@ def analyse_recording(rec: Any, *, channels: Sequence[str] | None = None,
                 _fail(results, name, prep[name]["ch"], prep[name], e, errors, too_short=True)
             continue
         segs = segs_list[0]
-        tot, cnt = _mean_square_time(xs, segs, np.arange(len(names)), fs, (0.0, fs / 2), det)
+        rows = np.arange(len(names))
+        tot, cnt = _mean_square_time(xs, segs, rows, fs, (0.0, fs / 2), det)
+        band_ms = [(band, *_mean_square_time(xs, segs, rows, fs, band, det))
+                   for band in (_check_band(b, fs) for b in bands)]
         for i, name in enumerate(names):
             pr = prep[name]
             ch = pr["ch"]
@@ -1125,13 +1129,10 @@ def analyse_recording(rec: Any, *, channels: Sequence[str] | None = None,
             rms = BandRMS(band_Hz=(0.0, fs / 2), rms_time=float(np.sqrt(tot[i] / cnt)),
                           rms_parseval=float(rms_from_psd(spec)), unit=ch.unit,
                           n_samples=int(cnt))
-            brms = []
-            for b in bands:
-                band = _check_band(b, fs)
-                bt, bc = _mean_square_time(xs, segs, np.array([i]), fs, band, det)
-                brms.append(BandRMS(band_Hz=band, rms_time=float(np.sqrt(bt[0] / bc)),
-                                    rms_parseval=float(rms_from_psd(spec, band)),
-                                    unit=ch.unit, n_samples=int(bc)))
+            brms = [BandRMS(band_Hz=band, rms_time=float(np.sqrt(bt[i] / bc)),
+                            rms_parseval=float(rms_from_psd(spec, band)), unit=ch.unit,
+                            n_samples=int(bc))
+                    for band, bt, bc in band_ms]
             msgs = list(pr["msgs"])
             if account.n_segments_dropped:
                 msgs.append(f"{int(account.n_segments_dropped)} valid segment(s) shorter than "

@@ -32,6 +32,7 @@ exists but is distorted (harmonics of the clipped waveform), and the caller deci
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -132,14 +133,14 @@ class ConstantSignalError(SignalError):
 
 @dataclass(frozen=True, eq=False)
 class WindowProperties:
-    """What a window does to a spectrum, in bins of ``fs / nperseg``.
+    r"""What a window does to a spectrum, in bins of ``fs / nperseg``.
 
     Attributes
     ----------
     nperseg : int
         Window length (samples).
     enbw_bins : float
-        Equivalent noise bandwidth, :math:`N \\sum w^2 / (\\sum w)^2` (bins): 1.5 for Hann,
+        Equivalent noise bandwidth, :math:`N \sum w^2 / (\sum w)^2` (bins): 1.5 for Hann,
         3.77 for scipy's flattop.
     bandwidth_3dB_bins : float
         Full width of the spectral window :math:`|W(f)|^2` at half its peak (bins): the
@@ -148,14 +149,14 @@ class WindowProperties:
         Worst-case amplitude reading of a sine halfway between two bins, as a fraction lost:
         :math:`1 - |W(1/2)| / |W(0)|` (0.151 for Hann, 0.0011 for flattop).
     amplitude_tolerance : float
-        :math:`\\max_{0 \\le \\delta \\le 1/2} |1 - |W(\\delta)| / |W(0)||`: the largest relative
+        :math:`\max_{0 \le \delta \le 1/2} |1 - |W(\delta)| / |W(0)||`: the largest relative
         error of a sine's amplitude read at its nearest bin, wherever it falls (a flat top
         ripples slightly above 1 as well as below).
     mainlobe_half_width_bins : float
         Distance from the centre to the first null of :math:`|W|^2` (bins): 2 for Hann.
     bin_correlation : numpy.ndarray
-        :math:`\\rho_q^2`, q = 0, 1, ...: correlation of two PSD estimates q bins apart for a
-        Gaussian signal, :math:`\\rho_q = |\\sum w_n^2 e^{-2\\pi i q n/N}| / \\sum w_n^2`
+        :math:`\rho_q^2`, q = 0, 1, ...: correlation of two PSD estimates q bins apart for a
+        Gaussian signal, :math:`\rho_q = |\sum w_n^2 e^{-2\pi i q n/N}| / \sum w_n^2`
         (Hann: 1, 0.444, 0.028).
     kernel : numpy.ndarray
         The spectral window :math:`|W|^2` sampled at offsets ``kernel_offsets_bins``,
@@ -176,7 +177,7 @@ class WindowProperties:
     _w: np.ndarray
 
     def overlap_correlation(self, noverlap: int) -> np.ndarray:
-        """:math:`\\rho(mS)^2` for m = 1, 2, ... while windows S = nperseg - noverlap apart overlap.
+        r""":math:`\rho(mS)^2` for m = 1, 2, ... while windows S = nperseg - noverlap apart overlap.
 
         Percival and Walden (1993), Eq. (292b): correlation of two periodograms whose windows
         are shifted by m S samples.
@@ -300,7 +301,7 @@ def window_properties(window: Window, nperseg: int) -> WindowProperties:
 
 @dataclass(frozen=True, eq=False)
 class WelchAccount:
-    """How a Welch estimate was made from a (possibly gapped) signal, per channel.
+    r"""How a Welch estimate was made from a (possibly gapped) signal, per channel.
 
     Every attribute is a numpy array with the batch shape of the input (``()`` for one
     channel; use ``int(...)`` / ``float(...)`` there).
@@ -310,9 +311,9 @@ class WelchAccount:
     n_windows : numpy.ndarray
         Windows averaged, K.
     dof : numpy.ndarray
-        Equivalent degrees of freedom :math:`\\nu` of each PSD value: :math:`2K` for
+        Equivalent degrees of freedom :math:`\nu` of each PSD value: :math:`2K` for
         non-overlapping windows, fewer with overlap (Percival and Walden 1993, Eq. 292b), so
-        that :math:`\\nu \\hat S / S \\sim \\chi^2_\\nu` approximately.
+        that :math:`\nu \hat S / S \sim \chi^2_\nu` approximately.
     n_segments : numpy.ndarray
         Valid segments used.
     n_segments_dropped : numpy.ndarray
@@ -346,7 +347,7 @@ class _WelchBase:
     account: WelchAccount
 
     @property
-    def resolution_Hz(self) -> float:
+    def resolution_Hz(self) -> float:  # noqa: N802 (unit in the name)
         """Bin spacing ``fs / nperseg`` (Hz)."""
         return self.fs_Hz / self.nperseg
 
@@ -356,7 +357,7 @@ class _WelchBase:
         return window_properties(self.window, self.nperseg)
 
     @property
-    def enbw_Hz(self) -> float:
+    def enbw_Hz(self) -> float:  # noqa: N802 (unit in the name)
         """Equivalent noise bandwidth of one bin (Hz)."""
         return self.window_properties.enbw_bins * self.resolution_Hz
 
@@ -373,7 +374,7 @@ class _WelchBase:
 
 @dataclass(frozen=True, eq=False, kw_only=True)
 class Spectrum(_WelchBase):
-    """A one-sided power spectral density (Welch).
+    r"""A one-sided power spectral density (Welch).
 
     Attributes
     ----------
@@ -381,7 +382,7 @@ class Spectrum(_WelchBase):
         Bin frequencies (Hz), shape ``(n_freq,)``, ``n_freq = nperseg // 2 + 1``.
     psd_per_Hz : numpy.ndarray
         PSD (``unit``^2/Hz), float64, shape ``(..., n_freq)`` (the frequency axis where the
-        time axis was). One-sided: :math:`\\sum_k S_k \\Delta f` is the mean square.
+        time axis was). One-sided: :math:`\sum_k S_k \Delta f` is the mean square.
     unit : str
         Unit of the signal; the PSD is in ``(unit)^2/Hz``.
     fs_Hz : float
@@ -409,14 +410,14 @@ class Spectrum(_WelchBase):
 
 @dataclass(frozen=True, eq=False, kw_only=True)
 class AmplitudeSpectrum(_WelchBase):
-    """A window-corrected amplitude spectrum (RMS average of windowed periodograms).
+    r"""A window-corrected amplitude spectrum (RMS average of windowed periodograms).
 
     Attributes
     ----------
     freq_Hz : numpy.ndarray
         Bin frequencies (Hz).
     amplitude : numpy.ndarray
-        Peak amplitude (``unit``), shape ``(..., n_freq)``: a sine :math:`A\\sin(2\\pi f t)` with
+        Peak amplitude (``unit``), shape ``(..., n_freq)``: a sine :math:`A\sin(2\pi f t)` with
         f on a bin reads A there; off-bin it reads A within ``scalloping_tolerance``
         (relative). At 0 Hz it reads the mean (when not detrended).
     unit, fs_Hz, nperseg, noverlap, window, detrend, account
@@ -433,7 +434,7 @@ class AmplitudeSpectrum(_WelchBase):
 
 @dataclass(frozen=True, eq=False)
 class BandRMS:
-    """Band-limited RMS, in the time domain and from the PSD.
+    r"""Band-limited RMS, in the time domain and from the PSD.
 
     Attributes
     ----------
@@ -445,7 +446,7 @@ class BandRMS:
         square of the filtered samples taken over all those segments. Over the full band no
         filter is applied: plain mean square of the detrended samples.
     rms_parseval : numpy.ndarray or float
-        :math:`\\sqrt{\\sum_{f_{lo} \\le f_k \\le f_{hi}} S_k \\Delta f}` from the Welch PSD
+        :math:`\sqrt{\sum_{f_{lo} \le f_k \le f_{hi}} S_k \Delta f}` from the Welch PSD
         (``unit``).
     unit : str
     n_samples : numpy.ndarray or int
@@ -591,7 +592,7 @@ def _check_band(band_Hz: Sequence[float] | None, fs: float) -> tuple[float, floa
     return (lo, min(hi, fs / 2))
 
 
-def _row_name(i: tuple[int, ...], batch: tuple[int, ...]) -> str:
+def _row_name(i: tuple[Any, ...], batch: tuple[int, ...]) -> str:
     return "x" if not batch else "x[" + ", ".join(str(j) for j in i) + "]"
 
 
@@ -746,7 +747,7 @@ def welch_psd(x: Any, fs: float, *, valid: Any = None, unit: str = "",
               nperseg: int | None = None, resolution_Hz: float | None = None,
               noverlap: int | None = None, window: Window = "hann", detrend: Detrend = "constant",
               average: Average = "mean", axis: int = -1) -> Spectrum:
-    """Welch power spectral density of one or several channels, split at their gaps.
+    r"""Welch power spectral density of one or several channels, split at their gaps.
 
     Parameters
     ----------
@@ -792,13 +793,13 @@ def welch_psd(x: Any, fs: float, *, valid: Any = None, unit: str = "",
     Notes
     -----
     Within each valid segment of length L, :func:`scipy.signal.welch` averages
-    :math:`k = \\lfloor (L - n_o)/(N - n_o) \\rfloor` windowed periodograms; the estimate is
+    :math:`k = \lfloor (L - n_o)/(N - n_o) \rfloor` windowed periodograms; the estimate is
     their mean over all segments weighted by k (or the median over all windows):
 
-    .. math:: \\hat S(f_k) = \\frac{1}{K} \\sum_{j=1}^{K} \\frac{2 |\\sum_n w_n x_{j,n}
-              e^{-2\\pi i k n / N}|^2}{f_s \\sum_n w_n^2}.
+    .. math:: \hat S(f_k) = \frac{1}{K} \sum_{j=1}^{K} \frac{2 |\sum_n w_n x_{j,n}
+              e^{-2\pi i k n / N}|^2}{f_s \sum_n w_n^2}.
 
-    With the one-sided scaling, :math:`\\sum_k \\hat S(f_k) \\Delta f` is the (window-weighted)
+    With the one-sided scaling, :math:`\sum_k \hat S(f_k) \Delta f` is the (window-weighted)
     mean square of the detrended signal (Parseval).
 
     References
@@ -834,7 +835,7 @@ def amplitude_spectrum(x: Any, fs: float, *, valid: Any = None, unit: str = "",
                        nperseg: int | None = None, resolution_Hz: float | None = None,
                        noverlap: int | None = None, window: Window = "flattop",
                        detrend: Detrend = "constant", axis: int = -1) -> AmplitudeSpectrum:
-    """Peak-amplitude spectrum with window correction, split at gaps like :func:`welch_psd`.
+    r"""Peak-amplitude spectrum with window correction, split at gaps like :func:`welch_psd`.
 
     Parameters
     ----------
@@ -852,9 +853,9 @@ def amplitude_spectrum(x: Any, fs: float, *, valid: Any = None, unit: str = "",
 
     Notes
     -----
-    The power spectrum (``scaling="spectrum"``, :math:`|\\sum w x e^{-i\\omega n}|^2/(\\sum w)^2`,
+    The power spectrum (``scaling="spectrum"``, :math:`|\sum w x e^{-i\omega n}|^2/(\sum w)^2`,
     doubled one-sided) is averaged over windows (RMS averaging) and
-    :math:`A_k = \\sqrt{2 P_k}` (:math:`\\sqrt{P_0}` at 0 Hz and at the Nyquist bin).
+    :math:`A_k = \sqrt{2 P_k}` (:math:`\sqrt{P_0}` at 0 Hz and at the Nyquist bin).
 
     References
     ----------
@@ -887,7 +888,7 @@ def amplitude_spectrum(x: Any, fs: float, *, valid: Any = None, unit: str = "",
 
 
 def rms_from_psd(spectrum: Spectrum, band_Hz: Sequence[float] | None = None) -> Any:
-    """RMS in a band by Parseval: :math:`\\sqrt{\\sum_{f_{lo} \\le f_k \\le f_{hi}} S_k \\Delta f}`.
+    r"""RMS in a band by Parseval: :math:`\sqrt{\sum_{f_{lo} \le f_k \le f_{hi}} S_k \Delta f}`.
 
     Parameters
     ----------
@@ -951,7 +952,7 @@ def band_rms(x: Any, fs: float, band_Hz: Sequence[float] | None = None, *, valid
              unit: str = "", spectrum: Spectrum | None = None, nperseg: int | None = None,
              resolution_Hz: float | None = None, noverlap: int | None = None,
              window: Window = "hann", detrend: Detrend = "constant", axis: int = -1) -> BandRMS:
-    """Band-limited RMS in the time domain and by Parseval from the Welch PSD.
+    r"""Band-limited RMS in the time domain and by Parseval from the Welch PSD.
 
     Parameters
     ----------
@@ -972,7 +973,7 @@ def band_rms(x: Any, fs: float, band_Hz: Sequence[float] | None = None, *, valid
     -----
     Time domain: each valid segment long enough for one window (the segments the PSD used)
     is detrended as the windows are (``"constant"``: its mean removed), band-passed by zeroing
-    its DFT outside ``[f_lo, f_hi]``, and :math:`\\text{RMS}^2 = \\sum x_f^2 / n` over all those
+    its DFT outside ``[f_lo, f_hi]``, and :math:`\text{RMS}^2 = \sum x_f^2 / n` over all those
     segments. Parseval: see :func:`rms_from_psd`. The two differ by the window weighting
     (each Welch window weights its middle most), by detrending per window instead of per
     segment (which removes a little power below :math:`f_s/N`) and by leakage across the band
@@ -985,13 +986,14 @@ def band_rms(x: Any, fs: float, band_Hz: Sequence[float] | None = None, *, valid
     >>> abs(float(r.ratio) - 1) < 0.01
     True
     """
-    xs, fs, mask, nps, nov, w, det, props = _prepare(
-        x, fs, valid,
-        spectrum.nperseg if spectrum is not None else nperseg,
-        None if spectrum is not None else resolution_Hz,
-        spectrum.noverlap if spectrum is not None else noverlap,
-        spectrum.window if spectrum is not None else window,
-        spectrum.detrend if spectrum is not None else detrend, axis)
+    if spectrum is not None:
+        if float(fs) != spectrum.fs_Hz:
+            raise SignalError("fs", f"the sample rate of `spectrum`={spectrum.fs_Hz:g} Hz",
+                              repr(fs))
+        nperseg, noverlap = spectrum.nperseg, spectrum.noverlap
+        window, detrend, resolution_Hz = spectrum.window, spectrum.detrend, None
+    xs, fs, mask, nps, nov, _, det, _ = _prepare(x, fs, valid, nperseg, resolution_Hz,
+                                                 noverlap, window, detrend, axis)
     band = _check_band(band_Hz, fs)
     if spectrum is None:
         _check_not_constant(xs, mask)
@@ -1013,17 +1015,13 @@ def band_rms(x: Any, fs: float, band_Hz: Sequence[float] | None = None, *, valid
             segs = valid_segments(m2[i], nps)
             tot, cnt = _mean_square_time(x2, segs, np.array([i]), fs, band, det)
             ms[i], counts[i] = tot[0] / max(cnt, 1), cnt
-    rms_p = rms_from_psd(spectrum if spectrum.psd_per_Hz.ndim == 1 or axis in (-1, xs.ndim - 1)
-                         else _last_axis(spectrum, axis), band)
+    if spectrum.psd_per_Hz.ndim > 1 and axis not in (-1, xs.ndim - 1):
+        spectrum = dataclasses.replace(spectrum,
+                                       psd_per_Hz=np.moveaxis(spectrum.psd_per_Hz, axis, -1))
+    rms_p = rms_from_psd(spectrum, band)
     return BandRMS(band_Hz=band, rms_time=np.sqrt(ms).reshape(batch)[()],
                    rms_parseval=np.asarray(rms_p).reshape(batch)[()], unit=unit,
                    n_samples=counts.reshape(batch)[()])
-
-
-def _last_axis(spectrum: Spectrum, axis: int) -> Spectrum:
-    import dataclasses
-
-    return dataclasses.replace(spectrum, psd_per_Hz=np.moveaxis(spectrum.psd_per_Hz, axis, -1))
 
 
 # --------------------------------------------------------------------------------------------
@@ -1104,11 +1102,11 @@ def detect_clipping(x: Any, valid: Any = None, *, min_run: int = 3,
 
 
 def log_chi2_stats(dof: float) -> tuple[float, float]:
-    """Bias and variance of :math:`\\ln(\\hat S / S)` for a :math:`\\chi^2_\\nu/\\nu` estimate.
+    r"""Bias and variance of :math:`\ln(\hat S / S)` for a :math:`\chi^2_\nu/\nu` estimate.
 
-    :math:`E[\\ln \\hat S/S] = \\psi(\\nu/2) - \\ln(\\nu/2)` and
-    :math:`\\mathrm{Var}[\\ln \\hat S] = \\psi'(\\nu/2)` (digamma and trigamma), about
-    :math:`-1/\\nu` and :math:`2/\\nu` for large :math:`\\nu`.
+    :math:`E[\ln \hat S/S] = \psi(\nu/2) - \ln(\nu/2)` and
+    :math:`\mathrm{Var}[\ln \hat S] = \psi'(\nu/2)` (digamma and trigamma), about
+    :math:`-1/\nu` and :math:`2/\nu` for large :math:`\nu`.
     """
     h = 0.5 * float(dof)
     return float(polygamma(0, h) - np.log(h)), float(polygamma(1, h))

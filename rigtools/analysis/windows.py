@@ -1,4 +1,4 @@
-"""Gap-aware segmenting: split a channel at its gaps, never bridge them.
+r"""Gap-aware segmenting: split a channel at its gaps, never bridge them.
 
 A channel's ``valid`` mask (``False`` in gaps and for rejected samples) cuts the samples into
 *valid segments*, the maximal runs of consecutive valid samples. Spectral estimators work on
@@ -8,8 +8,8 @@ segments and the samples dropped are counted, so the loss shows up in the result
 
 The number of Welch windows that fit a segment of length ``L`` is
 
-.. math:: K(L) = \\lfloor (L - n_\\text{overlap}) / (n_\\text{perseg} - n_\\text{overlap})
-          \\rfloor \\quad (L \\ge n_\\text{perseg}),
+.. math:: K(L) = \lfloor (L - n_\text{overlap}) / (n_\text{perseg} - n_\text{overlap})
+          \rfloor \quad (L \ge n_\text{perseg}),
 
 the count :func:`scipy.signal.welch` uses (it drops the tail that does not fill a window).
 """
@@ -72,7 +72,8 @@ class Segments:
     @property
     def is_whole(self) -> bool:
         """True when there is one kept segment covering every sample (no gap at all)."""
-        return self.n_kept == 1 and int(self.starts[0]) == 0 and int(self.stops[0]) == self.n_samples
+        return (self.n_kept == 1 and int(self.starts[0]) == 0
+                and int(self.stops[0]) == self.n_samples)
 
     def n_windows(self, nperseg: int, noverlap: int) -> int:
         """Welch windows over all kept segments (see :func:`n_windows`)."""

@@ -118,7 +118,7 @@ def test_sine_rms_is_A_over_sqrt2_both_ways():
 @pytest.mark.parametrize("offset_bins", [0.0, 0.1, 0.25, 0.4, 0.5])
 def test_amplitude_spectrum_reads_A_within_scalloping_tolerance(window, tolerance,
                                                                offset_bins):
-    """A sine reads A at its bin; off-bin within the scalloping loss (flattop 0.11 %, Hann 15.1 %)."""
+    """On-bin A; off-bin A within the scalloping loss (flattop 0.11 %, Hann 15.1 %)."""
     A, nperseg = 4.0, 4096
     f0 = (300 + offset_bins) * FS / nperseg
     a = amplitude_spectrum(_sine(A, f0, 200_000), FS, nperseg=nperseg, window=window)

@@ -1,0 +1,779 @@
+"""The observations table: one tidy table per campaign, the input of calibration and reports.
+
+:func:`observe_campaign` reads every run of a :class:`~rigtools.campaign.Campaign`
+(:func:`rigtools.ingest.read`), analyses its accelerometer channels
+(:func:`~rigtools.analysis.peaks.analyse_recording`: Welch PSD, RMS, natural frequencies with
+damping and uncertainties; :func:`~rigtools.analysis.orders.step_levels`: mesh harmonics and
+Arms per speed step) and collects the numbers in one long :class:`pandas.DataFrame`.
+
+Layout
+------
+A long table with a ``quantity`` column; the columns, their units and their meaning are the
+contract ``data_schemas/observations.schema.json`` (column order and dtypes come from it):
+
+==================  ==========================================================================
+quantity            rows
+==================  ==========================================================================
+``run``             one per run: conditions, duration, ingest losses, provenance; the one row
+                    of a run that could not be read (``status = "failed"``, ``message`` says
+                    why, naming the file)
+``rms``             one per run x channel: full-band RMS (time domain and Parseval) and the
+                    channel's quality (gaps, clipping, Welch windows, dropped segments)
+``natural_frequency``
+                    one per structural PSD peak of a channel (``mode_index`` 0, 1, ... by
+                    frequency): ``f_n_Hz``, ``f_n_std_Hz``, ``zeta``, ``zeta_std`` (SDOF fit),
+                    half-power damping, prominence; also a *broad* peak on a mesh or shaft line
+                    (a resonance may coincide with it), flagged ``at_mesh_line``
+``arms``            one per channel x speed step (``step_index``), when ``[sensors] speed`` is
+                    set: step speed, mesh frequency, amplitudes of mesh harmonics 1-3 and
+                    :math:`A_{rms} = \\sqrt{A_1^2 + A_2^2 + A_3^2}`
+==================  ==========================================================================
+
+Conditions (``torque_Nm``, ``bulk_temperature_C``, ``oil_temperature_C``, ``speed_rpm``),
+provenance (``source_file``, ``source_sha256``, ``reader``, ``rigtools_version``) and the
+channel's quality counts repeat on every row, so a row stands alone after any filter. Columns
+that do not apply to a row's quantity are null (NaN for floats).
+
+Quality flags
+-------------
+Four boolean columns (``flag_gaps``, ``flag_clipping``, ``flag_low_snr``,
+``flag_windows_dropped``) and the full list in ``quality_flags`` (``;``-separated, vocabulary
+:data:`FLAGS`). ``status`` is ``"ok"`` (no flag), ``"flagged"`` (a value, with flags) or
+``"failed"`` (no value; ``message`` says why). Low SNR: a natural frequency whose peak
+prominence, or a mesh harmonic whose level above the order-spectrum floor (in the same
+bandwidth), is under ``[analysis] low_snr_dB`` (default 10 dB).
+
+Failures
+--------
+A run that cannot be read or analysed becomes a failed ``run`` row and the campaign goes on.
+A channel that cannot be analysed (constant, too short, missing, unit not an acceleration)
+gets a failed ``rms`` row; a speed signal that is missing or has no plateau gives failed
+``arms`` rows. Nothing is dropped silently.
+
+Files
+-----
+:func:`write_observations` writes Parquet with this module's schema JSON in the file metadata
+(``rigtools.observations.schema``) and the resolved campaign, analysis settings and library
+versions (``rigtools.observations``); :func:`read_observations` reads it back and
+:func:`validate_observations` checks a table against the schema.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Final
+
+import numpy as np
+import pandas as pd
+
+from rigtools.analysis.orders import StepLevels, step_levels_from_recording
+from rigtools.analysis.peaks import ChannelAnalysis, analyse_recording
+from rigtools.analysis.speed import (
+    MissingSpeedError,
+    SpeedProfile,
+    SpeedStep,
+    detect_speed_steps,
+    speed_profile,
+)
+from rigtools.campaign import CONDITION_KEYS, Campaign, CampaignRun
+from rigtools.errors import RigtoolsError
+from rigtools.schemas import iter_errors, load_schema
+
+__all__ = [
+    "FLAGS",
+    "METADATA_KEY",
+    "SCHEMA",
+    "SCHEMA_METADATA_KEY",
+    "Observations",
+    "RunObservations",
+    "observation_columns",
+    "observe_campaign",
+    "observe_run",
+    "read_observations",
+    "to_frame",
+    "validate_observations",
+    "write_observations",
+]
+
+SCHEMA: Final = "observations.schema.json"
+#: Parquet key-value metadata key holding the schema's JSON.
+SCHEMA_METADATA_KEY: Final = "rigtools.observations.schema"
+#: Parquet key-value metadata key holding the campaign, settings and versions (JSON).
+METADATA_KEY: Final = "rigtools.observations"
+
+#: Every flag a row may carry, and what it means.
+FLAGS: Final[dict[str, str]] = {
+    "gaps": "gaps or invalid samples in the channel (or run, or step)",
+    "clipping": "runs of samples at the channel's extreme values",
+    "low_snr": "peak prominence or mesh harmonic level under [analysis] low_snr_dB",
+    "windows_dropped": "valid segments shorter than a Welch window, or order blocks lost to gaps",
+    "ingest_losses": "frames or messages rejected at ingest",
+    "at_mesh_line": "a broad peak that coincides with a mesh or shaft line",
+    "no_structural_peak": "no structural peak found in the channel's PSD",
+    "peaks_failed": "the peak analysis of the channel failed",
+    "constant": "every valid sample equal",
+    "too_short": "no valid segment as long as one Welch window",
+    "unit_not_acceleration": "the channel's unit is not an acceleration rigtools converts",
+    "channel_missing": "a channel named in [sensors] accel is not in the recording",
+    "condition_unresolved": "a condition names a slow signal that is absent or has no value",
+    "speed_missing": "the speed signal is absent or covers none of the data",
+    "no_speed_step": "no speed plateau long enough for a step",
+    "step_without_block": "a speed step without one whole order block",
+    "above_passband": "a mesh harmonic above the angular resampler's passband",
+    "arms_failed": "the order analysis of the channel failed",
+    "run_failed": "the run could not be read or analysed",
+}
+
+#: Acceleration units and their factor to m/s^2.
+_ACCEL_TO_M_S2: Final[dict[str, float]] = {
+    "m/s^2": 1.0, "m/s2": 1.0, "m/s²": 1.0, "m s-2": 1.0, "m*s^-2": 1.0, "m.s-2": 1.0,
+    "mm/s^2": 1e-3, "mm/s2": 1e-3, "g": 9.80665, "g0": 9.80665, "gn": 9.80665,
+}
+_TORQUE_TO_NM: Final[dict[str, float]] = {
+    "N.m": 1.0, "Nm": 1.0, "N m": 1.0, "N·m": 1.0, "N*m": 1.0, "kN.m": 1e3, "kNm": 1e3,
+}
+_TEMPERATURE_OFFSET_C: Final[dict[str, float]] = {
+    "degC": 0.0, "°C": 0.0, "C": 0.0, "deg C": 0.0, "celsius": 0.0, "K": -273.15,
+}
+_HARMONICS: Final = (1, 2, 3)
+
+
+# --------------------------------------------------------------------------------------------
+# columns from the schema
+
+
+def observation_columns() -> dict[str, str]:
+    """Column name -> pandas dtype, in table order, from ``data_schemas/observations.schema.json``.
+
+    ``number`` -> ``float64``, ``integer`` -> ``Int64``, ``boolean`` -> ``boolean``, strings and
+    enums -> ``object`` (str or None).
+    """
+    props = load_schema(SCHEMA)["$defs"]["row"]["properties"]
+    out = {}
+    for name, p in props.items():
+        types = p.get("type", "string")
+        types = [types] if isinstance(types, str) else list(types)
+        if "number" in types:
+            out[name] = "float64"
+        elif "integer" in types:
+            out[name] = "Int64"
+        elif "boolean" in types:
+            out[name] = "boolean"
+        else:
+            out[name] = "object"
+    return out
+
+
+def to_frame(rows: Iterable[Mapping[str, Any]]) -> pd.DataFrame:
+    """Rows (dicts with any subset of the columns) as a table with every column, typed."""
+    cols = observation_columns()
+    records = [{c: r.get(c) for c in cols} for r in rows]
+    df = pd.DataFrame.from_records(records, columns=list(cols))
+    for c, dtype in cols.items():
+        if dtype == "float64":
+            df[c] = pd.to_numeric(df[c].astype(object).where(df[c].notna(), np.nan),
+                                  errors="raise").astype("float64")
+        elif dtype == "object":
+            df[c] = df[c].astype(object).where(df[c].notna(), None)
+        else:
+            df[c] = df[c].astype(dtype)
+    return df
+
+
+# --------------------------------------------------------------------------------------------
+# results
+
+
+@dataclass(frozen=True)
+class RunObservations:
+    """The rows of one run and whether it could be analysed.
+
+    Attributes
+    ----------
+    run_id : str
+    file : str
+        The recording as resolved from the campaign.
+    rows : tuple of dict
+        Rows of the table (see the module docstring).
+    analysed : bool
+        The run was read and at least one channel analysed.
+    error : str or None
+        Why the run failed (the file and the reason), when it did.
+    warnings : tuple of str
+        Problems that flagged rows but did not fail the run.
+    """
+
+    run_id: str
+    file: str
+    rows: tuple[dict[str, Any], ...]
+    analysed: bool
+    error: str | None = None
+    warnings: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Observations:
+    """The observations of a campaign.
+
+    Attributes
+    ----------
+    table : pandas.DataFrame
+        The tidy table (columns: :func:`observation_columns`).
+    runs : tuple of RunObservations
+        Per run, in campaign order.
+    metadata : dict
+        Resolved campaign, analysis settings, versions (JSON-ready; written with the table).
+    """
+
+    table: pd.DataFrame
+    runs: tuple[RunObservations, ...]
+    metadata: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def n_analysed(self) -> int:
+        """Runs analysed."""
+        return sum(r.analysed for r in self.runs)
+
+    @property
+    def failures(self) -> tuple[RunObservations, ...]:
+        """Runs that failed."""
+        return tuple(r for r in self.runs if not r.analysed)
+
+
+# --------------------------------------------------------------------------------------------
+# one run
+
+
+def _version() -> str:
+    from rigtools import __version__
+
+    return __version__
+
+
+def _finite(v: Any) -> float | None:
+    if v is None:
+        return None
+    f = float(v)
+    return f if math.isfinite(f) else None
+
+
+def _status(row: dict[str, Any]) -> dict[str, Any]:
+    """Fill ``quality_flags``, the flag columns and ``status`` from the row's ``_flags``."""
+    flags = list(dict.fromkeys(row.pop("_flags", [])))
+    row["quality_flags"] = ";".join(flags)
+    row["flag_gaps"] = "gaps" in flags
+    row["flag_clipping"] = "clipping" in flags
+    row["flag_windows_dropped"] = "windows_dropped" in flags
+    if row.get("quantity") in ("natural_frequency", "arms"):
+        row["flag_low_snr"] = "low_snr" in flags
+    if row.get("status") != "failed":
+        row["status"] = "flagged" if flags else "ok"
+    row.setdefault("message", "")
+    return row
+
+
+def _signal_mean(rec: Any, name: str, key: str) -> tuple[float | None, str | None]:
+    """Mean of a slow signal in the unit ``key`` names; (None, why) when it cannot be had."""
+    if key == "speed_rpm":
+        try:
+            prof = speed_profile(rec, name)
+        except (MissingSpeedError, ValueError) as exc:
+            return None, str(exc)
+        v = prof.speed_rpm[np.isfinite(prof.speed_rpm)]
+        return (float(np.mean(v)), None) if v.size else (None, f"{name!r} holds no value")
+    if name not in rec.slow:
+        return None, (f"{key} names slow signal {name!r}, not in the recording (it holds: "
+                      f"{', '.join(sorted(rec.slow)) or 'none'})")
+    s = rec.slow[name]
+    vals = np.asarray(s.values, np.float64)
+    vals = vals[np.isfinite(vals)]
+    if not vals.size:
+        return None, f"slow signal {name!r} holds no finite value"
+    unit = s.unit.strip()
+    if key == "torque_Nm":
+        if unit not in _TORQUE_TO_NM:
+            return None, f"slow signal {name!r} is in {unit!r}, not a torque unit ({', '.join(_TORQUE_TO_NM)})"
+        return float(np.mean(vals)) * _TORQUE_TO_NM[unit], None
+    if unit not in _TEMPERATURE_OFFSET_C:
+        return None, (f"slow signal {name!r} is in {unit!r}, not a temperature unit "
+                      f"({', '.join(_TEMPERATURE_OFFSET_C)})")
+    return float(np.mean(vals)) + _TEMPERATURE_OFFSET_C[unit], None
+
+
+def _failed_run(base: dict[str, Any], run: CampaignRun, reason: str) -> RunObservations:
+    msg = f"{run.file}: {reason}" if str(run.file) not in reason else reason
+    row = {**base, "quantity": "run", "status": "failed", "message": msg,
+           "_flags": ["run_failed"]}
+    return RunObservations(run.id, str(run.file), (_status(row),), analysed=False, error=msg)
+
+
+def observe_run(campaign: Campaign, run: CampaignRun, *, raise_errors: bool = False
+                ) -> RunObservations:
+    """Read and analyse one run of a campaign into rows of the observations table.
+
+    Parameters
+    ----------
+    campaign : Campaign
+    run : CampaignRun
+    raise_errors : bool
+        Re-raise instead of recording a failure (for debugging).
+
+    Returns
+    -------
+    RunObservations
+        Never raises for a bad run (unless ``raise_errors``): the failure is a failed ``run``
+        row naming the file and the reason.
+    """
+    base: dict[str, Any] = {
+        "campaign": campaign.name, "run_id": run.id, "source_file": run.file_as_written,
+        "rigtools_version": _version(),
+        **{k: v for k, v in run.numeric_conditions().items()},
+    }
+    try:
+        return _observe_run(campaign, run, base)
+    except (RigtoolsError, OSError, ValueError) as exc:
+        if raise_errors:
+            raise
+        reason = str(exc)
+        if isinstance(exc, OSError) and not isinstance(exc, RigtoolsError):
+            reason = f"{exc.strerror or exc}"
+        return _failed_run(base, run, reason)
+    except Exception as exc:  # a bug: record it loudly, keep the other runs
+        if raise_errors:
+            raise
+        return _failed_run(base, run, f"internal error {type(exc).__name__}: {exc} (rerun "
+                           "with --debug for a traceback, and please report it)")
+
+
+def _observe_run(campaign: Campaign, run: CampaignRun, base: dict[str, Any]
+                 ) -> RunObservations:
+    from rigtools.ingest import RunMetadata, read
+
+    s, a = campaign.sensors, campaign.analysis
+    meta = RunMetadata(run_id=run.id, rig=campaign.rig or None, gear_set=campaign.gear_set,
+                       conditions=run.numeric_conditions())
+    rec = read(run.file, dbc=s.dbc, mapping=s.mapping, metadata=meta)
+    prov = rec.provenance
+    base.update(source_sha256=prov.source_sha256, reader=prov.reader)
+    run_flags: list[str] = []
+    notes: list[str] = []  # problems that flag rows but do not fail the run
+
+    # conditions given as signal names
+    for key in CONDITION_KEYS:
+        v = getattr(run, key)
+        if isinstance(v, str):
+            val, why = _signal_mean(rec, v, key)
+            base[key] = val
+            if why:
+                run_flags.append("condition_unresolved")
+                notes.append(why)
+
+    # speed: the run's pinion speed, else the mean of the speed signal
+    z1, z2 = campaign.pinion_teeth, campaign.wheel_teeth
+    z_tracked = z1 if s.speed_shaft == "pinion" else z2
+    profile: SpeedProfile | None = None
+    speed_error: str | None = None
+    if s.speed is not None:
+        try:
+            profile = speed_profile(rec, s.speed, pulses_per_rev=s.pulses_per_rev)
+        except (MissingSpeedError, ValueError) as exc:
+            speed_error = str(exc)
+    if base.get("speed_rpm") is None and profile is not None:
+        v = profile.speed_rpm[np.isfinite(profile.speed_rpm)]
+        if v.size:
+            base["speed_rpm"] = float(np.mean(v)) * (z_tracked / z1)
+    pinion_rpm = base.get("speed_rpm")
+    f_mesh = None if pinion_rpm is None else z1 * pinion_rpm / 60.0
+    shafts = [] if pinion_rpm is None else [pinion_rpm / 60.0, pinion_rpm * z1 / z2 / 60.0]
+    base["mesh_frequency_Hz"] = f_mesh
+
+    # channels
+    if s.accel:
+        names = [c for c in s.accel if c in rec.channels]
+        missing = [c for c in s.accel if c not in rec.channels]
+    else:
+        names = [c for c in rec.channels if c != s.speed]
+        missing = []
+    rows: list[dict[str, Any]] = []
+    for c in missing:
+        run_flags.append("channel_missing")
+        msg = (f"channel {c!r} named in [sensors] accel is not in the recording (it holds: "
+               f"{', '.join(sorted(rec.channels)) or 'none'})")
+        notes.append(msg)
+        rows.append(_status({**base, "channel": c, "quantity": "rms", "status": "failed",
+                             "message": msg, "_flags": ["channel_missing"]}))
+    analysis = analyse_recording(
+        rec, channels=names, nperseg=a.nperseg, mesh_frequency_Hz=f_mesh,
+        shaft_frequencies_Hz=shafts, prominence_dB=a.prominence_dB, f_range_Hz=a.f_range_Hz,
+        max_peaks=a.max_peaks, response=a.response, errors="flag") if names else None
+    t0 = min((float(c.time_s[0]) if len(c) else c.start_time_s
+              for c in rec.channels.values()), default=0.0)
+    steps: tuple[SpeedStep, ...] = ()
+    if profile is not None:
+        steps = detect_speed_steps(profile, rel_tolerance=a.step_rel_tolerance,
+                                   min_duration_s=a.min_step_duration_s)
+    n_ok = 0
+    for name, ca in (analysis.channels.items() if analysis is not None else ()):
+        ch_rows, ok = _channel_rows(base, rec, ca, campaign)
+        n_ok += ok
+        rows.extend(ch_rows)
+        if ca.error:
+            notes.append(ca.error)
+        if s.speed is not None and ok:
+            rows.extend(_arms_rows(base, rec, name, ch_rows[0], profile, speed_error, steps,
+                                   z_tracked, z1, t0, campaign))
+
+    # the run row
+    rep = rec.report
+    if rep.n_rejected:
+        run_flags.append("ingest_losses")
+    if rep.gaps:
+        run_flags.append("gaps")
+    notes.extend(rep.warnings)
+    if rep.n_rejected:
+        notes.append(f"{rep.n_rejected} {rep.units} rejected at ingest: " + ", ".join(
+            f"{n} {reason}" for reason, n in sorted(rep.rejected.items())))
+    if rep.gaps:
+        notes.append(f"{len(rep.gaps)} gap(s) in sample counters, "
+                     f"{sum(g.n_missing for g in rep.gaps)} sample(s) missing")
+    warnings = tuple(f"{run.id}: {n}" for n in notes)
+    run_row = {**base, "quantity": "run", "duration_s": rec.duration_s,
+               "n_gaps": len(rep.gaps), "n_rejected": rep.n_rejected,
+               "message": "; ".join(notes), "_flags": run_flags}
+    if not names or n_ok == 0:
+        why = ("no accelerometer channel in the recording" if not names and not missing else
+               "no channel could be analysed")
+        run_row.update(status="failed", _flags=[*run_flags, "run_failed"],
+                       message="; ".join(x for x in (why, run_row["message"]) if x))
+        out = (_status(run_row), *rows)
+        return RunObservations(run.id, str(run.file), out, analysed=False,
+                               error=f"{run.file}: {run_row['message']}",
+                               warnings=warnings)
+    return RunObservations(run.id, str(run.file), (_status(run_row), *rows), analysed=True,
+                           warnings=warnings)
+
+
+def _channel_rows(base: dict[str, Any], rec: Any, ca: ChannelAnalysis, campaign: Campaign
+                  ) -> tuple[list[dict[str, Any]], bool]:
+    """The rms row and the natural_frequency rows of a channel; and whether it was analysed."""
+    a = campaign.analysis
+    q = ca.quality
+    flags: list[str] = []
+    if q.n_invalid:
+        flags.append("gaps")
+    if q.clipped:
+        flags.append("clipping")
+    if q.n_segments_dropped:
+        flags.append("windows_dropped")
+    if q.constant:
+        flags.append("constant")
+    if q.too_short:
+        flags.append("too_short")
+    factor = _ACCEL_TO_M_S2.get(ca.unit.strip())
+    if factor is None:
+        flags.append("unit_not_acceleration")
+    gaps = [g for g in rec.report.gaps if g.channel == ca.name]
+    common = {
+        **base, "channel": ca.name, "n_samples": q.n_samples, "n_invalid": q.n_invalid,
+        "n_gaps": len(gaps), "n_clipped": q.clipping.n_clipped if q.clipping else None,
+    }
+    msgs = list(q.messages)
+    if factor is None:
+        msgs.append(f"unit {ca.unit!r} is not an acceleration unit rigtools converts to m/s^2 "
+                    f"({', '.join(_ACCEL_TO_M_S2)}): RMS and Arms left empty")
+    rms = {**common, "quantity": "rms", "_flags": list(flags)}
+    if ca.spectrum is None or ca.rms is None:
+        rms.update(status="failed", message=ca.error or "; ".join(msgs) or "not analysed")
+        return [_status(rms)], False
+    rms.update(
+        n_windows=q.n_windows, n_segments_dropped=q.n_segments_dropped,
+        n_samples_dropped=q.n_samples_dropped,
+        rms_m_s2=None if factor is None else float(ca.rms.rms_time) * factor,
+        rms_parseval_m_s2=None if factor is None else float(ca.rms.rms_parseval) * factor)
+    common.update(n_windows=q.n_windows, n_segments_dropped=q.n_segments_dropped,
+                  n_samples_dropped=q.n_samples_dropped)
+    rows = [rms]
+    if ca.peaks is None:
+        rms["_flags"].append("peaks_failed")
+        msgs.append(ca.error or "peak analysis failed")
+    else:
+        k = 0
+        for pk in ca.peaks.peaks:
+            if pk.mode is None or not (pk.kind == "structural" or pk.possible_resonance):
+                continue
+            m = pk.mode
+            pflags = [f for f in flags if f != "unit_not_acceleration"]
+            pmsg = []
+            if pk.possible_resonance:
+                pflags.append("at_mesh_line")
+                loc = pk.location
+                pmsg.append(f"broad peak on a {pk.kind.replace('_', ' ')} "
+                            f"({loc.expected_Hz:.1f} Hz): a resonance may coincide with it")
+            if pk.prominence_dB < a.low_snr_dB:
+                pflags.append("low_snr")
+                pmsg.append(f"prominence {pk.prominence_dB:.1f} dB < {a.low_snr_dB:g} dB")
+            rows.append({
+                **common, "quantity": "natural_frequency", "mode_index": k,
+                "f_n_Hz": _finite(m.f_n_Hz), "f_n_std_Hz": _finite(m.f_n_std_Hz),
+                "zeta": _finite(m.zeta), "zeta_std": _finite(m.zeta_std),
+                "zeta_half_power": _finite(m.zeta_half_power),
+                "zeta_half_power_std": _finite(m.zeta_half_power_std),
+                "peak_kind": pk.kind, "prominence_dB": float(pk.prominence_dB),
+                "snr_dB": float(pk.prominence_dB), "message": "; ".join(pmsg),
+                "_flags": pflags})
+            k += 1
+        if k == 0:
+            rms["_flags"].append("no_structural_peak")
+    rms["message"] = "; ".join(msgs)
+    return [_status(r) for r in rows], True
+
+
+def _order_floor_snr_dB(sl: StepLevels, i: int) -> float | None:
+    """Weakest mesh harmonic of step ``i`` over the order-spectrum floor, same bandwidth (dB).
+
+    The floor is the median power per bin over orders 0.5 z .. 3.5 z away from the harmonics
+    (and below the passband), scaled to the ``2 m + 1`` bins a harmonic is read over and
+    divided by the window's noise bandwidth, as the harmonic's amplitude is.
+    """
+    spec = sl.spectra[i]
+    if spec is None:
+        return None
+    o, amp = spec.order, spec.amplitude
+    z = sl.z1
+    band = 1  # step_levels' default band_bins
+    sel = (o >= 0.5 * z) & (o <= 3.5 * z) & (o <= spec.max_valid_order)
+    for h in sl.harmonics:
+        sel &= np.abs(o - h * z) > (band + 2) / spec.revolutions
+    if np.count_nonzero(sel) < 8:
+        return None
+    floor = math.sqrt(float(np.median(amp[sel] ** 2)) * (2 * band + 1) / spec.enbw_bins)
+    a = sl.amplitude[i]
+    a = a[np.isfinite(a)]
+    if not a.size or floor <= 0:
+        return None
+    return float(20 * np.log10(np.min(a) / floor))
+
+
+def _arms_rows(base: dict[str, Any], rec: Any, name: str, rms_row: dict[str, Any],
+               profile: SpeedProfile | None, speed_error: str | None,
+               steps: tuple[SpeedStep, ...], z_tracked: int, z1: int, t0: float,
+               campaign: Campaign) -> list[dict[str, Any]]:
+    a = campaign.analysis
+    factor = _ACCEL_TO_M_S2.get(rec.channels[name].unit.strip())
+    keep = ("n_samples", "n_invalid", "n_clipped")
+    common = {**base, "channel": name, "quantity": "arms",
+              **{k: rms_row.get(k) for k in keep}}
+    ch_flags = ["clipping"] if rms_row["flag_clipping"] else []
+    if profile is None:
+        return [_status({**common, "status": "failed", "message": speed_error or "no speed",
+                         "_flags": ["speed_missing"]})]
+    if factor is None:
+        return [_status({**common, "status": "failed", "_flags": ["unit_not_acceleration"],
+                         "message": f"unit {rec.channels[name].unit!r} is not an acceleration"})]
+    if not steps:
+        return [_status({**common, "status": "failed", "_flags": ["no_speed_step"],
+                         "message": f"no speed plateau of at least {a.min_step_duration_s:g} s "
+                         f"within +-{100 * a.step_rel_tolerance:g} % in {campaign.sensors.speed!r}"
+                         })]
+    try:
+        sl = step_levels_from_recording(rec, name, profile, z_tracked, steps=steps,
+                                        harmonics=_HARMONICS, revs_per_block=a.revs_per_block)
+    except (RigtoolsError, ValueError) as exc:
+        return [_status({**common, "status": "failed", "message": f"Arms per step: {exc}",
+                         "_flags": ["arms_failed"]})]
+    rows = []
+    for i, st in enumerate(sl.steps):
+        flags = list(ch_flags)
+        msg = []
+        n_gaps = int(sl.n_gaps[i])
+        if n_gaps:
+            flags += ["gaps", "windows_dropped"]
+            msg.append(f"{n_gaps} stretch(es) of invalid samples or unknown speed in the step")
+        row = {**common, "step_index": i, "step_start_s": st.start_s - t0,
+               "step_stop_s": st.stop_s - t0, "n_gaps": n_gaps,
+               "n_windows": int(sl.n_blocks[i])}
+        if sl.n_blocks[i] == 0:
+            flags.append("step_without_block")
+            rows.append(_status({**row, "status": "failed", "_flags": flags,
+                                 "message": "; ".join([*msg, "no whole block of "
+                                                       f"{sl.revs_per_block} revolutions"])}))
+            continue
+        amp = sl.amplitude[i] * factor
+        if not np.all(np.isfinite(amp)):
+            flags.append("above_passband")
+            msg.append("a mesh harmonic lies above the resampler's passband (NaN)")
+        snr = _order_floor_snr_dB(sl, i)
+        if snr is not None and snr < a.low_snr_dB:
+            flags.append("low_snr")
+            msg.append(f"weakest mesh harmonic {snr:.1f} dB over the floor < {a.low_snr_dB:g} dB")
+        f_mesh = float(sl.mesh_frequency_Hz[i])
+        rows.append(_status({
+            **row, "mesh_frequency_Hz": f_mesh, "step_speed_rpm": f_mesh * 60.0 / z1,
+            "a1_m_s2": _finite(amp[0]), "a2_m_s2": _finite(amp[1]), "a3_m_s2": _finite(amp[2]),
+            "arms_m_s2": _finite(sl.arms[i] * factor), "snr_dB": snr,
+            "message": "; ".join(msg), "_flags": flags}))
+    return rows
+
+
+# --------------------------------------------------------------------------------------------
+# a campaign
+
+
+def observe_campaign(campaign: Campaign, *,
+                     on_run: Callable[[RunObservations], None] | None = None,
+                     raise_errors: bool = False) -> Observations:
+    """Observations of every run of a campaign.
+
+    Parameters
+    ----------
+    campaign : Campaign
+    on_run : callable, optional
+        Called with each run's :class:`RunObservations` as it is done (progress, reporting).
+    raise_errors : bool
+        Re-raise a run's error instead of recording it.
+
+    Returns
+    -------
+    Observations
+        Failed runs are in the table (a failed ``run`` row) and in ``failures``.
+    """
+    runs = []
+    for run in campaign.runs:
+        r = observe_run(campaign, run, raise_errors=raise_errors)
+        runs.append(r)
+        if on_run is not None:
+            on_run(r)
+    rows = [row for r in runs for row in r.rows]
+    return Observations(table=to_frame(rows), runs=tuple(runs),
+                        metadata=_metadata(campaign, runs))
+
+
+def _metadata(campaign: Campaign, runs: list[RunObservations]) -> dict[str, Any]:
+    from rigtools.ingest.reader import versions
+
+    return {
+        "format": "rigtools observations",
+        "schema": f"data_schemas/{SCHEMA}",
+        "campaign": campaign.to_dict(),
+        "gear": {"name": campaign.gear.name, "z1": campaign.pinion_teeth,
+                 "z2": campaign.wheel_teeth},
+        "harmonics": list(_HARMONICS),
+        "flags": FLAGS,
+        "versions": versions(),
+        "runs": [{"id": r.run_id, "file": r.file, "analysed": r.analysed, "error": r.error}
+                 for r in runs],
+    }
+
+
+# --------------------------------------------------------------------------------------------
+# files
+
+
+def write_observations(obs: Observations | pd.DataFrame, path: str | Path,
+                       metadata: Mapping[str, Any] | None = None) -> Path:
+    """Write the table as Parquet, with the schema and the metadata in the file's metadata.
+
+    Parameters
+    ----------
+    obs : Observations or pandas.DataFrame
+    path : str or pathlib.Path
+    metadata : mapping, optional
+        Metadata for a bare DataFrame (an Observations carries its own).
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    if isinstance(obs, Observations):
+        df, meta = obs.table, dict(obs.metadata)
+    else:
+        df, meta = to_frame(obs.to_dict("records")), dict(metadata or {})
+    table = pa.Table.from_pandas(df, preserve_index=False)
+    kv = dict(table.schema.metadata or {})
+    kv[SCHEMA_METADATA_KEY.encode()] = json.dumps(load_schema(SCHEMA)).encode()
+    kv[METADATA_KEY.encode()] = json.dumps(_json_safe(meta), allow_nan=False).encode()
+    table = table.replace_schema_metadata(kv)
+    out = Path(path)
+    tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp")
+    try:
+        pq.write_table(table, tmp)
+        os.replace(tmp, out)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    return out
+
+
+def read_observations(path: str | Path) -> pd.DataFrame:
+    """Read an observations table; its metadata is in ``df.attrs["rigtools"]``.
+
+    ``df.attrs["schema"]`` holds the schema the file was written with.
+    """
+    import pyarrow.parquet as pq
+
+    table = pq.read_table(path)
+    kv = table.schema.metadata or {}
+    df = to_frame(table.to_pandas().to_dict("records"))
+    if METADATA_KEY.encode() in kv:
+        df.attrs["rigtools"] = json.loads(kv[METADATA_KEY.encode()])
+    if SCHEMA_METADATA_KEY.encode() in kv:
+        df.attrs["schema"] = json.loads(kv[SCHEMA_METADATA_KEY.encode()])
+    return df
+
+
+def _json_safe(obj: Any) -> Any:
+    if isinstance(obj, float | np.floating):
+        f = float(obj)
+        return f if math.isfinite(f) else None
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    if isinstance(obj, Path):
+        return str(obj)
+    if isinstance(obj, Mapping):
+        return {str(k): _json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_json_safe(v) for v in obj]
+    if obj is pd.NA or obj is pd.NaT:
+        return None
+    return obj
+
+
+def _cell(v: Any) -> Any:
+    if v is None or v is pd.NA:
+        return None
+    if isinstance(v, float | np.floating):
+        return None if not math.isfinite(float(v)) else float(v)
+    if isinstance(v, np.integer):
+        return int(v)
+    if isinstance(v, np.bool_):
+        return bool(v)
+    return v
+
+
+def validate_observations(df: pd.DataFrame) -> list[tuple[str, str]]:
+    """Check a table against ``data_schemas/observations.schema.json``.
+
+    Returns
+    -------
+    list of (str, str)
+        ``(json_path, message)`` per violation (``$[3].f_n_Hz``: row 3), best first; empty when
+        valid. NaN counts as null.
+    """
+    cols = list(observation_columns())
+    extra = [c for c in df.columns if c not in cols]
+    rows = [{c: _cell(v) for c, v in rec.items()}
+            for rec in df.astype(object).to_dict("records")]
+    errors = iter_errors(rows, SCHEMA)
+    if extra:
+        errors.insert(0, ("$", f"columns not in the schema: {extra}"))
+    return errors
