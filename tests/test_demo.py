@@ -2,6 +2,8 @@
 
 import json
 
+import pytest
+
 from rigtools.cli import main
 
 
@@ -17,9 +19,12 @@ def test_demo_runs_and_recovers_the_synthetic_truth(tmp_path, capsys):
         assert f["report"]["rejected"] == {} and f["report"]["gaps"] == []
     truth = summary["truth"]
     a = summary["analysis"]["accel_1"]  # channel 1 has gain 1
-    # Mesh harmonics: off-bin amplitudes from the Hann main lobe, within 5 % (noise 0.2 m/s^2).
-    for h in ("A1", "A2", "A3"):
-        assert abs(a[h] - truth[h]) < 0.05 * truth[h] + 0.05
-    # Resonance: 12.5 Hz Welch bins and ~50 averages over 2 s: f_n within 2 %, zeta within 25 %.
-    assert abs(a["f_n_Hz"] - truth["f_n_Hz"]) < 0.02 * truth["f_n_Hz"]
-    assert abs(a["zeta"] - truth["zeta"]) < 0.25 * truth["zeta"]
+    # Mesh orders by order tracking on PinionSpeed_rpm: A1, A2 within 5 %; A3 sits under the
+    # resonance's broadband skirt and reads high (noise floor not subtracted): within 30 %.
+    assert a["A1"] == pytest.approx(truth["A1"], rel=0.05)
+    assert a["A2"] == pytest.approx(truth["A2"], rel=0.05)
+    assert a["A3"] == pytest.approx(truth["A3"], rel=0.30)
+    # Structural mode by a single-DOF fit to the Welch PSD (2 s): f_n within 1 %, zeta within
+    # 20 % (the fit's own 1-sigma is about 5 % here).
+    assert a["f_n_Hz"] == pytest.approx(truth["f_n_Hz"], rel=0.01)
+    assert a["zeta"] == pytest.approx(truth["zeta"], rel=0.20)

@@ -28,7 +28,9 @@ For each peak of a Welch PSD (:class:`~rigtools.analysis.spectra.Spectrum`):
    B_\text{3dB} / (2 f)`, with :math:`B_\text{3dB}` the window's half-power bandwidth: a pure
    tone appears that wide), ``"tonal"`` for a narrow peak at none of them (fitted damping at
    or below that, or, when too few bins are free to fit, half-power damping below it),
-   ``"unresolved"`` when the fit fails.
+   ``"unresolved"`` when the fit fails. A broad peak within tolerance of a sideband or shaft
+   line (lines as narrow as a tone) is ``"structural"``; one on a mesh harmonic stays
+   ``"mesh_harmonic"`` with ``possible_resonance`` set.
 
 :func:`analyse_recording` runs spectra, RMS, quality checks and peaks over the channels of a
 :class:`~rigtools.ingest.recording.Recording` and returns one :class:`ChannelAnalysis` each.
@@ -866,7 +868,11 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
         mode = _estimate(ctx, k, lo, hi, mask, p, fit_span, response,
                          line=loc.kind is not None)
         z, zhp = mode.fit.zeta, mode.zeta_half_power
-        if loc.kind is not None:
+        if loc.kind in ("mesh_sideband", "shaft_harmonic") and mode.broad:
+            # Sidebands and shaft lines are as narrow as a tone; a broad peak that merely falls
+            # within their tolerance is a resonance (its `location` still names the line).
+            kind = "structural"
+        elif loc.kind is not None:
             kind = loc.kind
         elif np.isfinite(z) and (mode.fit.at_lower_bound or z <= mode.zeta_resolution):
             kind = "tonal"

@@ -1,0 +1,1 @@
+"""Synthetic rig runs, writers for the reference formats, and the demo job."""

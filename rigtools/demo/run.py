@@ -8,79 +8,56 @@ Until the demo campaign of the pipeline issue exists, this is what ``rigtools de
    recording and read back (exact round trip checked), its ``info`` printed;
 3. the formats compared sample for sample (CAN exact; MCAP carries float32 samples, so it is
    compared with the truth rounded to float32);
-4. a first analysis of the ingested data — Welch PSD, RMS, amplitudes of mesh harmonics 1-3
-   and the structural resonance with half-power damping — against the known truth.
+4. the analysis of the ingested data (:mod:`rigtools.analysis`: Welch PSD, RMS, the structural
+   mode by a single-DOF fit with uncertainties, mesh orders 1-3 and Arms by order tracking on
+   the speed signal) against the known truth.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy import signal as sps
 
+from rigtools.analysis import analyse_recording, step_levels_from_recording
 from rigtools.cli.info import format_info
 from rigtools.demo.can_writer import encode_reference_frames, write_can_log
 from rigtools.demo.mcap_writer import write_accel_mcap
 from rigtools.demo.synthetic import SyntheticRun, synthetic_run
 from rigtools.ingest import Recording, RunMetadata, read, read_parquet, write_parquet
 
-__all__ = ["analyse_channel", "run_demo"]
+__all__ = ["analyse_demo", "run_demo"]
 
 
-def analyse_channel(x: np.ndarray, fs: float, f_mesh: float) -> dict[str, float]:
-    """RMS, mesh-harmonic amplitudes and the dominant resonance of one channel.
+def analyse_demo(rec: Recording, f_mesh: float, z1: int) -> dict[str, dict[str, float]]:
+    """Per channel: RMS, the structural mode, mesh-order amplitudes A1..A3 and Arms.
 
-    Parameters
-    ----------
-    x : numpy.ndarray
-        Samples (m/s^2), no gaps.
-    fs : float
-        Sample rate (Hz).
-    f_mesh : float
-        Mesh frequency (Hz).
-
-    Returns
-    -------
-    dict
-        ``rms`` (m/s^2); ``A1..A3`` amplitudes of mesh harmonics (m/s^2, Hann window with
-        amplitude correction, peak interpolated over the three nearest bins); ``f_n_Hz`` and
-        ``zeta`` of the strongest PSD peak away from the mesh harmonics (half-power
-        bandwidth on the Welch PSD).
+    The mode is the fitted f_n and zeta with 1-sigma uncertainties; the orders come from order
+    tracking on the speed signal. Uses :func:`rigtools.analysis.analyse_recording` (Welch PSD, peaks, single-DOF fit) and
+    :func:`rigtools.analysis.step_levels_from_recording` (angular resampling on
+    ``PinionSpeed_rpm``).
     """
-    x = np.asarray(x, np.float64) - np.mean(x)
-    n = x.size
-    w = np.hanning(n)
-    spec = np.abs(np.fft.rfft(x * w)) * 2 / w.sum()
-    out: dict[str, float] = {"rms": float(np.sqrt(np.mean(x**2)))}
-    for h in (1, 2, 3):
-        i = round(h * f_mesh * n / fs)
-        # Energy sum over the Hann main lobe recovers the amplitude off-bin.
-        lobe = spec[i - 2 : i + 3]
-        out[f"A{h}"] = float(np.sqrt(np.sum(lobe**2) / 1.5))
-    f, pxx = sps.welch(x, fs, nperseg=2048)  # ~100 averages: a steadier half-power width
-    away = np.ones_like(f, bool)
-    for h in range(1, int(f[-1] // f_mesh) + 1):
-        away &= np.abs(f - h * f_mesh) > 20
-    away &= f > 50
-    ip = int(np.argmax(np.where(away, pxx, 0)))
-    half = pxx[ip] / 2
-    lo = ip
-    while lo > 0 and pxx[lo] > half:
-        lo -= 1
-    hi = ip
-    while hi < pxx.size - 1 and pxx[hi] > half:
-        hi += 1
-
-    def cross(a: int, b: int) -> float:  # linear interpolation of the half-power crossing
-        return float(f[a] + (half - pxx[a]) * (f[b] - f[a]) / (pxx[b] - pxx[a]))
-
-    f1, f2 = cross(lo, lo + 1), cross(hi - 1, hi)
-    out["f_n_Hz"] = float(f[ip])
-    out["zeta"] = float((f2 - f1) / (2 * f[ip]))
+    ra = analyse_recording(rec, mesh_frequency_Hz=f_mesh,
+                           shaft_frequencies_Hz=(f_mesh / z1,))
+    out: dict[str, dict[str, float]] = {}
+    for name, ca in ra.channels.items():
+        row: dict[str, float] = {"rms": float(ca.rms.rms_time)}
+        structural = [p for p in ca.peaks.peaks if p.kind == "structural" and p.mode]
+        if structural:
+            m = max(structural, key=lambda p: p.psd_per_Hz).mode
+            assert m is not None
+            row.update(f_n_Hz=m.f_n_Hz, f_n_std_Hz=m.f_n_std_Hz, zeta=m.zeta,
+                       zeta_std=m.zeta_std)
+        steps = step_levels_from_recording(rec, name, "PinionSpeed_rpm", z1)
+        if steps.steps:  # one speed step in the demo run: its order amplitudes and Arms
+            for k, a in enumerate(np.asarray(steps.amplitude)[0, :3], 1):
+                row[f"A{k}"] = float(a)
+            row["Arms"] = float(np.asarray(steps.arms)[0])
+        out[name] = row
     return out
 
 
@@ -145,17 +122,20 @@ def run_demo(output: str | Path, *, duration_s: float = 4.0, seed: int = 0) -> i
                                    "report": rec.report.to_dict()}
     rec = recs["blf"]
     print()
-    print("== analysis (BLF recording)")
-    print(f"{'channel':<10}{'RMS':>9}{'A1':>8}{'A2':>8}{'A3':>8}{'f_n Hz':>10}{'zeta':>8}")
-    analysis = {}
-    for name, ch in rec.channels.items():
-        a = analyse_channel(ch.values[ch.valid], ch.sample_rate_Hz, run.truth["mesh_frequency_Hz"])
-        analysis[name] = a
-        print(f"{name:<10}{a['rms']:>9.3f}{a['A1']:>8.3f}{a['A2']:>8.3f}{a['A3']:>8.3f}"
-              f"{a['f_n_Hz']:>10.1f}{a['zeta']:>8.4f}")
+    print("== analysis (BLF recording): rigtools.analysis spectra, peaks, order tracking")
+    print(f"{'channel':<10}{'RMS':>9}{'A1':>8}{'A2':>8}{'A3':>8}{'Arms':>8}"
+          f"{'f_n Hz':>16}{'zeta':>18}")
+    analysis = analyse_demo(rec, run.truth["mesh_frequency_Hz"], int(run.metadata["z1"]))
+    nan = float("nan")
+    for name, a in analysis.items():
+        print(f"{name:<10}{a['rms']:>9.3f}{a.get('A1', nan):>8.3f}{a.get('A2', nan):>8.3f}"
+              f"{a.get('A3', nan):>8.3f}{a.get('Arms', nan):>8.3f}"
+              f"{a.get('f_n_Hz', nan):>9.1f} ± {a.get('f_n_std_Hz', nan):<4.1f}"
+              f"{a.get('zeta', nan):>10.4f} ± {a.get('zeta_std', nan):.4f}")
     t = run.truth
-    print(f"{'truth':<10}{'':>9}{t['A1']:>8.3f}{t['A2']:>8.3f}{t['A3']:>8.3f}{t['f_n_Hz']:>10.1f}"
-          f"{t['zeta']:>8.4f}   (A scaled by 1/(1+0.3 k) on channel k+1)")
+    print(f"{'truth':<10}{'':>9}{t['A1']:>8.3f}{t['A2']:>8.3f}{t['A3']:>8.3f}"
+          f"{math.sqrt(t['A1']**2 + t['A2']**2 + t['A3']**2):>8.3f}{t['f_n_Hz']:>9.1f}"
+          f"{'':7}{t['zeta']:>10.4f}   (amplitudes scaled by 1/(1+0.3 k) on channel k+1)")
     summary["analysis"] = analysis
     (out / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
     print()

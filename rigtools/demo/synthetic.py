@@ -131,7 +131,7 @@ def synthetic_run(
     truth = {"mesh_frequency_Hz": f_mesh, "A1": amps[0], "A2": amps[1], "A3": amps[2],
              "f_n_Hz": f_n_Hz, "zeta": zeta}
     metadata = {"run_id": "demo-LS9-90C", "rig": "FZG back-to-back (synthetic)",
-                "gear_set": "fzg-c",
+                "gear_set": "fzg-c", "z1": z1,
                 "conditions": {"torque_Nm": torque_Nm, "bulk_temperature_C": bulk_temperature_C,
                                "speed_rpm": speed_rpm}}
     return SyntheticRun(channels, fs, float(start_time_s), slow, truth, metadata)
