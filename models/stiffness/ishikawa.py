@@ -446,8 +446,11 @@ class IshikawaDeflection:
 
     @property
     def stiffness_N_per_m(self) -> np.ndarray:  # noqa: N802 (unit in the name, STYLE 4.4)
-        """Single-tooth stiffness ``k_E = F / delta`` (N/m); inf where the load line passes
-        through the root (no Ishikawa deflection there, see ``EquivalentTooth.load_clamped``)."""
+        """Single-tooth stiffness ``k_E = F / delta`` (N/m).
+
+        Inf where the load line passes through the root (no Ishikawa deflection there, see
+        ``EquivalentTooth.load_clamped``).
+        """
         with np.errstate(divide="ignore"):
             return self.load_N / self.total_m
 

@@ -37,7 +37,8 @@ def analyse_demo(rec: Recording, f_mesh: float, z1: int) -> dict[str, dict[str, 
     """Per channel: RMS, the structural mode, mesh-order amplitudes A1..A3 and Arms.
 
     The mode is the fitted f_n and zeta with 1-sigma uncertainties; the orders come from order
-    tracking on the speed signal. Uses :func:`rigtools.analysis.analyse_recording` (Welch PSD, peaks, single-DOF fit) and
+    tracking on the speed signal. Uses :func:`rigtools.analysis.analyse_recording` (Welch PSD,
+    peaks, single-DOF fit) and
     :func:`rigtools.analysis.step_levels_from_recording` (angular resampling on
     ``PinionSpeed_rpm``).
     """

@@ -10,6 +10,7 @@ data.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -403,5 +404,4 @@ def _contiguous_runs(
         return [(starts, raw)]
     bounds = [0, *breaks.tolist(), m]
     raw = np.ascontiguousarray(raw)
-    return [(starts[a : a + 1], raw[a:b].reshape(1, -1)) for a, b in zip(bounds[:-1], bounds[1:],
-                                                                          strict=True)]
+    return [(starts[a : a + 1], raw[a:b].reshape(1, -1)) for a, b in itertools.pairwise(bounds)]

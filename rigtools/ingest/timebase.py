@@ -122,7 +122,7 @@ def unwrap_counter(
         if following.size == RESTART_RUN and np.all(following == typical):
             step[p] = typical
             if expected is not None and np.isfinite(expected[p]) and expected[p] > 0:
-                step[p] = max(1, min(int(round(expected[p])), 1 << 40))
+                step[p] = max(1, min(round(expected[p]), 1 << 40))
             restarts.append(p + 1)
     ticks = np.empty(n, np.int64)
     ticks[0] = c[0]

@@ -96,7 +96,7 @@ def test_parquet_without_rigtools_metadata_is_refused(tmp_path):
 
     p = tmp_path / "plain.parquet"
     pq.write_table(pa.table({"x": [1.0, 2.0]}), p)
-    with pytest.raises(RecordingFormatError, match="without 'rigtools.recording' metadata"):
+    with pytest.raises(RecordingFormatError, match=r"without 'rigtools\.recording' metadata"):
         read_parquet(p)
 
 
