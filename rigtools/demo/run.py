@@ -46,6 +46,9 @@ def analyse_demo(rec: Recording, f_mesh: float, z1: int) -> dict[str, dict[str, 
                            shaft_frequencies_Hz=(f_mesh / z1,))
     out: dict[str, dict[str, float]] = {}
     for name, ca in ra.channels.items():
+        if ca.rms is None or ca.peaks is None:  # the channel could not be analysed
+            out[name] = {}
+            continue
         row: dict[str, float] = {"rms": float(ca.rms.rms_time)}
         structural = [p for p in ca.peaks.peaks if p.kind == "structural" and p.mode]
         if structural:
@@ -67,7 +70,7 @@ def _files(run: SyntheticRun, out: Path) -> dict[str, Path]:
     md = RunMetadata(
         run_id=str(run.metadata["run_id"]), rig=str(run.metadata["rig"]),
         gear_set=str(run.metadata["gear_set"]),
-        conditions=dict(run.metadata["conditions"]),  # type: ignore[arg-type]
+        conditions=dict(run.metadata["conditions"]),
     )
     mcap = write_accel_mcap(
         out / "demo_run.mcap",
@@ -129,7 +132,7 @@ def run_demo(output: str | Path, *, duration_s: float = 4.0, seed: int = 0) -> i
     analysis = analyse_demo(rec, run.truth["mesh_frequency_Hz"], int(run.metadata["z1"]))
     nan = float("nan")
     for name, a in analysis.items():
-        print(f"{name:<10}{a['rms']:>9.3f}{a.get('A1', nan):>8.3f}{a.get('A2', nan):>8.3f}"
+        print(f"{name:<10}{a.get('rms', nan):>9.3f}{a.get('A1', nan):>8.3f}{a.get('A2', nan):>8.3f}"
               f"{a.get('A3', nan):>8.3f}{a.get('Arms', nan):>8.3f}"
               f"{a.get('f_n_Hz', nan):>9.1f} ± {a.get('f_n_std_Hz', nan):<4.1f}"
               f"{a.get('zeta', nan):>10.4f} ± {a.get('zeta_std', nan):.4f}")

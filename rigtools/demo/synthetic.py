@@ -12,6 +12,7 @@ CAN round trip is exact.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from scipy import signal as sps
@@ -45,7 +46,7 @@ class SyntheticRun:
     start_time_s: float
     slow: dict[str, tuple[np.ndarray, np.ndarray, str]]
     truth: dict[str, float] = field(default_factory=dict)
-    metadata: dict[str, object] = field(default_factory=dict)
+    metadata: dict[str, Any] = field(default_factory=dict)
 
 
 def synthetic_run(

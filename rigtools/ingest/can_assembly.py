@@ -15,7 +15,7 @@ counted in the :class:`~rigtools.ingest.recording.IngestReport` under a reason:
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -133,7 +133,7 @@ def assemble_can(
             builder.add_slow(name, s.unit, t, vals)
 
 
-def _buses_by_index(d: dict[tuple[int, int], object]) -> dict[int, set[int]]:
+def _buses_by_index(d: Mapping[tuple[int, int], object]) -> dict[int, set[int]]:
     out: dict[int, set[int]] = {}
     for i, bus in d:
         out.setdefault(i, set()).add(bus)
