@@ -1,4 +1,4 @@
-"""The observations table: one tidy table per campaign, the input of calibration and reports.
+r"""The observations table: one tidy table per campaign, the input of calibration and reports.
 
 :func:`observe_campaign` reads every run of a :class:`~rigtools.campaign.Campaign`
 (:func:`rigtools.ingest.read`), analyses its accelerometer channels
@@ -26,7 +26,7 @@ quantity            rows
                     (a resonance may coincide with it), flagged ``at_mesh_line``
 ``arms``            one per channel x speed step (``step_index``), when ``[sensors] speed`` is
                     set: step speed, mesh frequency, amplitudes of mesh harmonics 1-3 and
-                    :math:`A_{rms} = \\sqrt{A_1^2 + A_2^2 + A_3^2}`
+                    :math:`A_{rms} = \sqrt{A_1^2 + A_2^2 + A_3^2}`
 ==================  ==========================================================================
 
 Conditions (``torque_Nm``, ``bulk_temperature_C``, ``oil_temperature_C``, ``speed_rpm``),
@@ -113,7 +113,7 @@ FLAGS: Final[dict[str, str]] = {
     "low_snr": "peak prominence or mesh harmonic level under [analysis] low_snr_dB",
     "windows_dropped": "valid segments shorter than a Welch window, or order blocks lost to gaps",
     "ingest_losses": "frames or messages rejected at ingest",
-    "at_mesh_line": "a broad peak that coincides with a mesh or shaft line",
+    "at_mesh_line": "a broad peak within tolerance of a mesh harmonic, sideband or shaft line",
     "no_structural_peak": "no structural peak found in the channel's PSD",
     "peaks_failed": "the peak analysis of the channel failed",
     "constant": "every valid sample equal",
@@ -297,7 +297,8 @@ def _signal_mean(rec: Any, name: str, key: str) -> tuple[float | None, str | Non
     unit = s.unit.strip()
     if key == "torque_Nm":
         if unit not in _TORQUE_TO_NM:
-            return None, f"slow signal {name!r} is in {unit!r}, not a torque unit ({', '.join(_TORQUE_TO_NM)})"
+            return None, (f"slow signal {name!r} is in {unit!r}, not a torque unit "
+                          f"({', '.join(_TORQUE_TO_NM)})")
         return float(np.mean(vals)) * _TORQUE_TO_NM[unit], None
     if unit not in _TEMPERATURE_OFFSET_C:
         return None, (f"slow signal {name!r} is in {unit!r}, not a temperature unit "
@@ -509,11 +510,11 @@ def _channel_rows(base: dict[str, Any], rec: Any, ca: ChannelAnalysis, campaign:
             m = pk.mode
             pflags = [f for f in flags if f != "unit_not_acceleration"]
             pmsg = []
-            if pk.possible_resonance:
+            loc = pk.location
+            if loc.kind is not None:
                 pflags.append("at_mesh_line")
-                loc = pk.location
-                pmsg.append(f"broad peak on a {pk.kind.replace('_', ' ')} "
-                            f"({loc.expected_Hz:.1f} Hz): a resonance may coincide with it")
+                pmsg.append(f"broad peak within tolerance of a {loc.kind.replace('_', ' ')} "
+                            f"({loc.expected_Hz:.1f} Hz): a resonance, the line may bias it")
             if pk.prominence_dB < a.low_snr_dB:
                 pflags.append("low_snr")
                 pmsg.append(f"prominence {pk.prominence_dB:.1f} dB < {a.low_snr_dB:g} dB")
@@ -533,7 +534,7 @@ def _channel_rows(base: dict[str, Any], rec: Any, ca: ChannelAnalysis, campaign:
     return [_status(r) for r in rows], True
 
 
-def _order_floor_snr_dB(sl: StepLevels, i: int) -> float | None:
+def _order_floor_snr_db(sl: StepLevels, i: int) -> float | None:
     """Weakest mesh harmonic of step ``i`` over the order-spectrum floor, same bandwidth (dB).
 
     The floor is the median power per bin over orders 0.5 z .. 3.5 z away from the harmonics
@@ -607,7 +608,7 @@ def _arms_rows(base: dict[str, Any], rec: Any, name: str, rms_row: dict[str, Any
         if not np.all(np.isfinite(amp)):
             flags.append("above_passband")
             msg.append("a mesh harmonic lies above the resampler's passband (NaN)")
-        snr = _order_floor_snr_dB(sl, i)
+        snr = _order_floor_snr_db(sl, i)
         if snr is not None and snr < a.low_snr_dB:
             flags.append("low_snr")
             msg.append(f"weakest mesh harmonic {snr:.1f} dB over the floor < {a.low_snr_dB:g} dB")

@@ -20,7 +20,7 @@ import sys
 from collections.abc import Sequence
 
 from rigtools import __version__
-from rigtools.cli import demo, info, ingest
+from rigtools.cli import demo, info, ingest, observe, spectrum
 from rigtools.errors import RigtoolsError
 
 __all__ = ["EXIT_OK", "EXIT_UNUSABLE", "EXIT_USAGE", "main"]
@@ -29,7 +29,7 @@ EXIT_OK = 0
 EXIT_USAGE = 2
 EXIT_UNUSABLE = 3
 
-_SUBCOMMANDS = (ingest, info, demo)
+_SUBCOMMANDS = (ingest, info, spectrum, observe, demo)
 
 
 def build_parser() -> argparse.ArgumentParser:

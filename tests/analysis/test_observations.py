@@ -5,10 +5,9 @@ run A as MCAP (1.5 s, torque and temperature given as numbers), run B as a refer
 with ten frames of accel_1 dropped (conditions read from its slow signals), run C a file that
 does not exist.
 
-Truth: the synthetic mode is made by the bilinear transform of an SDOF with f_n prewarped, which
-keeps the peak at f_n but compresses its bandwidth by sin(2x)/(2x), x = pi f_n / fs: the
-digital damping ratio is that factor times the nominal one (0.0183 for 0.02 at 2950 Hz and
-25.6 kHz). f_n = 2950 Hz sits clear of the mesh harmonics and sidebands at 1500 rpm (400 Hz).
+Truth: the synthetic mode is an SDOF mapped to a digital filter by impulse invariance (poles
+exact), so its damping ratio is the nominal one; f_n = 2950 Hz sits clear of the mesh
+harmonics and sidebands at 1500 rpm (400 Hz).
 """
 
 from __future__ import annotations
@@ -45,12 +44,6 @@ FS = 25_600.0
 SPEED = 1500.0
 Z1 = 16
 AMPS = (4.0, 1.5, 0.8)  # synthetic mesh harmonics on accel_1 (accel_2: / 1.3)
-
-
-def zeta_digital(zeta: float = ZETA, f_n: float = F_N, fs: float = FS) -> float:
-    """Damping of the synthetic digital resonance (bilinear transform, prewarped at f_n)."""
-    x = math.pi * f_n / fs
-    return zeta * math.sin(2 * x) / (2 * x)
 
 
 def write_mcap_run(path: Path, *, seed: int, duration_s: float = 1.5, **kw) -> Path:
@@ -224,12 +217,13 @@ def test_natural_frequency_recovered_near_the_synthetic_truth(observed):
     modes = rows(df, quantity="natural_frequency", peak_kind="structural", mode_index=0)
     assert set(zip(modes.run_id, modes.channel, strict=True)) == {
         ("A", "accel_1"), ("A", "accel_2"), ("B", "accel_1"), ("B", "accel_2")}
-    zd = zeta_digital()
+    zd = ZETA
     for r in modes.itertuples():
         assert 0 < r.f_n_std_Hz < 10
         assert abs(r.f_n_Hz - F_N) < max(3 * r.f_n_std_Hz, 5.0), (r.run_id, r.channel, r.f_n_Hz)
         assert 0 < r.zeta_std < 0.005
-        assert abs(r.zeta - zd) < max(3 * r.zeta_std, 0.2 * zd), (r.run_id, r.channel, r.zeta)
+        # 1.5 s records: the scatter of zeta over seeds is about 0.002 (11 %)
+        assert abs(r.zeta - zd) < max(3 * r.zeta_std, 0.3 * zd), (r.run_id, r.channel, r.zeta)
         assert r.prominence_dB > 20 and not r.flag_low_snr
     # the mean over four channels, within the combined uncertainty
     assert abs(modes.f_n_Hz.mean() - F_N) < 3 * math.sqrt((modes.f_n_std_Hz**2).sum()) / 4 + 1
@@ -252,7 +246,8 @@ def test_arms_per_speed_step_near_the_synthetic_harmonics(observed):
     df = observed.table
     arms = rows(df, run_id="A", quantity="arms")
     assert list(arms.channel) == ["accel_1", "accel_2"]
-    assert (arms.step_index == 0).all() and (arms.status == "ok").all()
+    assert (arms.step_index == 0).all() and (arms.status != "failed").all()
+    assert not arms.flag_gaps.any()
     for r, gain in zip(arms.itertuples(), (1.0, 1 / 1.3), strict=True):
         np.testing.assert_allclose(r.step_speed_rpm, SPEED, rtol=1e-3)
         np.testing.assert_allclose(r.mesh_frequency_Hz, Z1 * SPEED / 60, rtol=1e-3)
@@ -355,7 +350,8 @@ def test_validation_catches_a_broken_table(observed):
 
 def test_to_frame_fills_every_column_with_its_dtype():
     df = to_frame([{"campaign": "c", "run_id": "r", "quantity": "run", "status": "ok",
-                    "quality_flags": "", "message": "", "source_file": "x", "rigtools_version": "0"}])
+                    "quality_flags": "", "message": "", "source_file": "x",
+                    "rigtools_version": "0"}])
     assert df.dtypes["f_n_Hz"] == np.float64 and np.isnan(df.f_n_Hz[0])
     assert str(df.dtypes["n_windows"]) == "Int64" and df.n_windows.isna()[0]
     assert str(df.dtypes["flag_low_snr"]) == "boolean"

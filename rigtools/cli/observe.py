@@ -1,0 +1,127 @@
+"""``rigtools observe CAMPAIGN.toml -o OBS.parquet``: the observations table of a campaign.
+
+Reads and analyses every run of the campaign (ingest, spectra, natural frequencies with damping,
+RMS, Arms per speed step) with a progress bar over runs on stderr (when stderr is a terminal),
+and writes the tidy table (``data_schemas/observations.schema.json``) as Parquet. A run that
+fails is reported on stderr with its file and the reason, recorded in the table, and the others
+go on. Exit 0 when at least one run was analysed, 3 when none could be (or the campaign file
+itself is malformed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from typing import Any
+
+__all__ = ["add_parser", "format_summary", "run"]
+
+_EXIT_UNUSABLE = 3
+
+
+def add_parser(subparsers: Any) -> None:
+    """Register the subcommand."""
+    p = subparsers.add_parser(
+        "observe",
+        help="analyse every run of a campaign into one observations table (Parquet)",
+        description="Read and analyse every run of a campaign manifest (TOML) and write one "
+        "tidy table: conditions, natural frequencies with damping, RMS, Arms per speed step, "
+        "quality flags and provenance per run and channel.",
+    )
+    p.add_argument("campaign", help="campaign manifest (TOML)")
+    p.add_argument("-o", "--output", required=True, help="output .parquet file")
+    p.set_defaults(func=run)
+
+
+class _Progress:
+    """A tqdm bar over runs on stderr, disabled when stderr is not a terminal."""
+
+    def __init__(self, total: int) -> None:
+        self.bar: Any = None
+        isatty = getattr(sys.stderr, "isatty", None)
+        if isatty is not None and isatty():
+            try:
+                from tqdm import tqdm
+            except ImportError:  # progress is a nicety; the table is the job
+                tqdm = None
+            if tqdm is not None:
+                self.bar = tqdm(total=total, unit="run", desc="observe", file=sys.stderr,
+                                leave=False, dynamic_ncols=True)
+
+    def write(self, line: str) -> None:
+        if self.bar is not None:
+            self.bar.write(line, file=sys.stderr)
+        else:
+            print(line, file=sys.stderr)
+
+    def update(self, run_id: str) -> None:
+        if self.bar is not None:
+            self.bar.set_postfix_str(run_id, refresh=False)
+            self.bar.update(1)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def _fmt(v: Any, spec: str) -> str:
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        return "-"
+    return format(f, spec) if math.isfinite(f) else "-"
+
+
+def format_summary(obs: Any) -> str:
+    """One line per run: status, channels analysed, modes, lowest f_n (median), Arms (max)."""
+    df = obs.table
+    lines = [f"{'run':<16}{'status':<9}{'channels':>9}{'modes':>7}{'f_n Hz':>10}{'zeta':>8}"
+             f"{'steps':>7}{'Arms m/s^2':>12}"]
+    for r in obs.runs:
+        rows = df[df["run_id"] == r.run_id]
+        run_row = rows[rows["quantity"] == "run"]
+        status = str(run_row["status"].iloc[0]) if len(run_row) else "-"
+        rms = rows[rows["quantity"] == "rms"]
+        n_ok = int((rms["status"] != "failed").sum())
+        modes = rows[(rows["quantity"] == "natural_frequency") & (rows["status"] != "failed")]
+        lowest = modes[modes["mode_index"] == 0]
+        arms = rows[(rows["quantity"] == "arms") & (rows["status"] != "failed")]
+        lines.append(
+            f"{r.run_id:<16}{status:<9}{f'{n_ok}/{len(rms)}':>9}{len(modes):>7}"
+            f"{_fmt(lowest['f_n_Hz'].median() if len(lowest) else None, '.1f'):>10}"
+            f"{_fmt(lowest['zeta'].median() if len(lowest) else None, '.4f'):>8}"
+            f"{arms['step_index'].nunique() if len(arms) else 0:>7}"
+            f"{_fmt(arms['arms_m_s2'].max() if len(arms) else None, '.3g'):>12}")
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the subcommand."""
+    from rigtools.analysis.observations import observe_campaign, write_observations
+    from rigtools.campaign import load_campaign
+
+    campaign = load_campaign(args.campaign)
+    progress = _Progress(len(campaign.runs))
+
+    def on_run(r: Any) -> None:
+        for w in r.warnings:
+            progress.write(f"rigtools: warning: {w}")
+        if not r.analysed:
+            progress.write(f"rigtools: error: run {r.run_id!r} failed: {r.error}")
+        progress.update(r.run_id)
+
+    try:
+        obs = observe_campaign(campaign, on_run=on_run, raise_errors=bool(args.debug))
+    finally:
+        progress.close()
+    out = write_observations(obs, args.output)
+    n, total = obs.n_analysed, len(obs.runs)
+    print(format_summary(obs))
+    print()
+    failed = f", {total - n} failed" if n < total else ""
+    print(f"wrote {out}: {len(obs.table)} rows, {n} of {total} run(s) analysed{failed}")
+    if n == 0:
+        print(f"rigtools: error: {args.campaign}: no run could be analysed", file=sys.stderr)
+        return _EXIT_UNUSABLE
+    return 0

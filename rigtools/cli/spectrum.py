@@ -1,0 +1,182 @@
+"""``rigtools spectrum FILE``: Welch PSD, RMS and peaks (natural frequencies, damping) per channel.
+
+Prints one line per channel (rate, Welch windows, degrees of freedom, RMS in the time domain
+and from the PSD, quality flags) and one line per PSD peak (frequency, prominence, kind; for
+structural peaks the SDOF natural frequency and damping with their standard uncertainties).
+``--plot OUT.png`` draws the PSDs with the peaks marked (matplotlib Figure on the Agg canvas,
+no pyplot). Exit 0 when at least one channel was analysed, 3 when none could be.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+from rigtools.cli._common import add_read_options, read_from_args, warn_losses
+
+__all__ = ["add_parser", "format_spectrum", "plot_spectrum", "run"]
+
+_EXIT_UNUSABLE = 3
+
+
+def add_parser(subparsers: Any) -> None:
+    """Register the subcommand."""
+    p = subparsers.add_parser(
+        "spectrum",
+        help="print the PSD peaks (natural frequencies, damping) and RMS of each channel",
+        description="Read a recording and print, per channel, the Welch PSD's RMS and peaks: "
+        "natural frequencies with damping and uncertainties, mesh and shaft lines.",
+    )
+    p.add_argument("file", help="recording file")
+    p.add_argument("--channel", action="append", dest="channels", metavar="C",
+                   help="channel to analyse (repeat for several; default all)")
+    p.add_argument("--nperseg", type=int, default=4096, metavar="N",
+                   help="Welch window length in samples (default 4096)")
+    p.add_argument("--mesh-frequency-Hz", dest="mesh_Hz", type=float, default=None, metavar="F",
+                   help="mesh frequency, to tell mesh harmonics from resonances")
+    p.add_argument("--prominence-dB", dest="prominence_dB", type=float, default=6.0,
+                   metavar="DB", help="least prominence of a peak (default 6 dB)")
+    p.add_argument("--plot", metavar="OUT.png", help="write the PSDs with peaks as a PNG")
+    add_read_options(p)
+    p.set_defaults(func=run)
+
+
+def _f(v: float | None, fmt: str) -> str:
+    return "-" if v is None or not math.isfinite(v) else format(v, fmt)
+
+
+def _channel_flags(ca: Any) -> str:
+    q = ca.quality
+    out = []
+    if q.n_invalid:
+        out.append(f"gaps({q.n_invalid} invalid)")
+    if q.clipped:
+        out.append("clipped")
+    if q.n_segments_dropped:
+        out.append(f"segments_dropped({q.n_segments_dropped})")
+    if q.constant:
+        out.append("constant")
+    if q.too_short:
+        out.append("too_short")
+    if ca.spectrum is not None and ca.peaks is None:
+        out.append("peaks_failed")
+    return ",".join(out) or "-"
+
+
+def format_spectrum(analysis: Any, source: str) -> str:
+    """The printed table of a :class:`~rigtools.analysis.peaks.RecordingAnalysis`."""
+    chans = list(analysis.channels.values())
+    first = next((c.spectrum for c in chans if c.spectrum is not None), None)
+    lines = [f"source    {source}"]
+    if first is not None:
+        lines.append(f"welch     nperseg {first.nperseg} ({first.fs_Hz / first.nperseg:.4g} Hz "
+                     f"bins), {first.window} window, noverlap {first.noverlap}")
+    lines.append("")
+    lines.append(f"{'channel':<16}{'unit':<9}{'rate Hz':>9}{'windows':>9}{'dof':>8}"
+                 f"{'RMS time':>11}{'RMS PSD':>11}  flags")
+    for ca in chans:
+        if ca.spectrum is None or ca.rms is None:
+            lines.append(f"{ca.name:<16}{ca.unit:<9}{ca.sample_rate_Hz:>9g}{'-':>9}{'-':>8}"
+                         f"{'-':>11}{'-':>11}  {_channel_flags(ca)}: {ca.error}")
+            continue
+        q = ca.quality
+        lines.append(f"{ca.name:<16}{ca.unit:<9}{ca.sample_rate_Hz:>9g}{q.n_windows:>9}"
+                     f"{q.dof:>8.1f}{float(ca.rms.rms_time):>11.4g}"
+                     f"{float(ca.rms.rms_parseval):>11.4g}  {_channel_flags(ca)}")
+    lines.append("")
+    lines.append(f"{'channel':<16}{'f Hz':>10}{'+-Hz':>8}{'prom dB':>9}  {'kind':<16}"
+                 f"{'f_n Hz':>10}{'+-Hz':>8}{'zeta':>9}{'+-':>9}")
+    n = 0
+    for ca in chans:
+        if ca.peaks is None:
+            continue
+        for pk in ca.peaks.peaks:
+            n += 1
+            m = pk.mode if (pk.kind == "structural" or pk.possible_resonance) else None
+            kind = pk.kind + ("*" if pk.possible_resonance else "")
+            lines.append(
+                f"{ca.name:<16}{pk.f_Hz:>10.1f}{_f(pk.f_std_Hz, '.1f'):>8}"
+                f"{pk.prominence_dB:>9.1f}  {kind:<16}"
+                f"{_f(m.f_n_Hz if m else None, '.1f'):>10}"
+                f"{_f(m.f_n_std_Hz if m else None, '.1f'):>8}"
+                f"{_f(m.zeta if m else None, '.4f'):>9}{_f(m.zeta_std if m else None, '.4f'):>9}")
+    if n == 0:
+        lines.append("(no peak)")
+    elif any(pk.possible_resonance for ca in chans if ca.peaks for pk in ca.peaks.peaks):
+        lines.append("* broad peak on a mesh or shaft line: a resonance may coincide with it")
+    return "\n".join(lines)
+
+
+def plot_spectrum(analysis: Any, title: str = "") -> Any:
+    """A :class:`matplotlib.figure.Figure` of the PSDs with their peaks marked (Agg canvas)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(7.0, 4.2), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    unit = ""
+    for ca in analysis.channels.values():
+        spec = ca.spectrum
+        if spec is None:
+            continue
+        unit = spec.psd_unit
+        f, p = spec.freq_Hz[1:], spec.psd_per_Hz[1:]
+        peaks = ca.peaks.peaks if ca.peaks is not None else ()
+        modes = [pk.mode for pk in peaks if pk.mode is not None
+                 and (pk.kind == "structural" or pk.possible_resonance)]
+        label = ca.name
+        if modes:
+            shown = ", ".join(f"{m.f_n_Hz:.0f} Hz (ζ {m.zeta:.3f})" for m in modes[:3])
+            label += f": f_n {shown}" + (" ..." if len(modes) > 3 else "")
+        (line,) = ax.semilogy(f, p, lw=0.8, label=label)
+        for pk in peaks:
+            structural = pk.kind == "structural" or pk.possible_resonance
+            ax.plot([pk.f_Hz], [pk.psd_per_Hz], "v" if structural else "x",
+                    color=line.get_color(), ms=7 if structural else 4)
+    ax.set_xlabel("frequency (Hz)")
+    ax.set_ylabel(f"PSD ({unit})" if unit else "PSD")
+    ax.grid(True, which="both", lw=0.3, alpha=0.5)
+    if ax.lines:
+        ax.legend(fontsize=8, loc="upper right")
+    ax.set_title(title + "  (▼ resonance, × line or tone)" if title else
+                 "▼ resonance, × line or tone", fontsize=9)
+    return fig
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the subcommand."""
+    from rigtools.analysis.peaks import analyse_recording
+
+    rec = read_from_args(args)
+    if args.channels:
+        missing = [c for c in args.channels if c not in rec.channels]
+        if missing:
+            print(f"rigtools: error: {args.file}: no channel {', '.join(map(repr, missing))} "
+                  f"(the recording holds: {', '.join(rec.channels) or 'none'})",
+                  file=sys.stderr)
+            return _EXIT_UNUSABLE
+    if not rec.channels:
+        print(f"rigtools: error: {args.file}: the recording holds no uniform channel",
+              file=sys.stderr)
+        return _EXIT_UNUSABLE
+    analysis = analyse_recording(rec, channels=args.channels, nperseg=args.nperseg,
+                                 mesh_frequency_Hz=args.mesh_Hz,
+                                 prominence_dB=args.prominence_dB, errors="flag")
+    print(format_spectrum(analysis, str(args.file)))
+    warn_losses(rec)
+    for ca in analysis.channels.values():
+        if ca.error:
+            print(f"rigtools: warning: {ca.error}", file=sys.stderr)
+    if args.plot:
+        fig = plot_spectrum(analysis, Path(args.file).name)
+        out = Path(args.plot)
+        fig.savefig(out, format="png", dpi=150)
+        print(f"wrote {out}")
+    if all(ca.spectrum is None for ca in analysis.channels.values()):
+        print(f"rigtools: error: {args.file}: no channel could be analysed", file=sys.stderr)
+        return _EXIT_UNUSABLE
+    return 0
