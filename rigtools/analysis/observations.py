@@ -24,9 +24,13 @@ quantity            rows
                     frequency): ``f_n_Hz``, ``f_n_std_Hz``, ``zeta``, ``zeta_std`` (SDOF fit),
                     half-power damping, prominence; also a *broad* peak on a mesh or shaft line
                     (a resonance may coincide with it), flagged ``at_mesh_line``
-``arms``            one per channel x speed step (``step_index``), when ``[sensors] speed`` is
-                    set: step speed, mesh frequency, amplitudes of mesh harmonics 1-3 and
-                    :math:`A_{rms} = \sqrt{A_1^2 + A_2^2 + A_3^2}`
+``arms``            one per channel x speed step (``segment = "step"``, ``step_index``), when
+                    ``[sensors] speed`` is set: step speed, mesh frequency, amplitudes of mesh
+                    harmonics 1-3 and :math:`A_{rms} = \sqrt{A_1^2 + A_2^2 + A_3^2}`; when the
+                    speed has no plateau (a ramped run-up), one per channel x window of
+                    ``revs_per_block`` revolutions along the ramp (``segment = "ramp"``,
+                    :func:`~rigtools.analysis.orders.run_up_curve`), with the window's speed
+                    and mesh frequency
 ==================  ==========================================================================
 
 Conditions (``torque_Nm``, ``bulk_temperature_C``, ``oil_temperature_C``, ``speed_rpm``),
@@ -39,7 +43,9 @@ Quality flags
 Four boolean columns (``flag_gaps``, ``flag_clipping``, ``flag_low_snr``,
 ``flag_windows_dropped``) and the full list in ``quality_flags`` (``;``-separated, vocabulary
 :data:`FLAGS`). ``status`` is ``"ok"`` (no flag), ``"flagged"`` (a value, with flags) or
-``"failed"`` (no value; ``message`` says why). Low SNR: a natural frequency whose peak
+``"failed"`` (no value; ``message`` says why). A ``run`` row is ``"flagged"`` as soon as any
+row of the run is failed or flagged: its flags are the union of theirs and its message counts
+them per channel. Low SNR: a natural frequency whose peak
 prominence, or a mesh harmonic whose level above the order-spectrum floor (in the same
 bandwidth), is under ``[analysis] low_snr_dB`` (default 10 dB).
 
@@ -47,8 +53,10 @@ Failures
 --------
 A run that cannot be read or analysed becomes a failed ``run`` row and the campaign goes on.
 A channel that cannot be analysed (constant, too short, missing, unit not an acceleration)
-gets a failed ``rms`` row; a speed signal that is missing or has no plateau gives failed
-``arms`` rows. Nothing is dropped silently.
+gets a failed ``rms`` row; a speed signal that is missing gives failed ``arms`` rows (and a
+run warning). When the speed varies beyond ``[analysis] step_rel_tolerance`` the mesh line
+sweeps the spectrum, so natural-frequency rows are flagged ``speed_varies``. Nothing is dropped
+silently.
 
 Files
 -----
@@ -71,7 +79,12 @@ from typing import Any, Final
 import numpy as np
 import pandas as pd
 
-from rigtools.analysis.orders import StepLevels, step_levels_from_recording
+from rigtools.analysis.orders import (
+    RunUpCurve,
+    StepLevels,
+    run_up_curve_from_recording,
+    step_levels_from_recording,
+)
 from rigtools.analysis.peaks import ChannelAnalysis, analyse_recording
 from rigtools.analysis.speed import (
     MissingSpeedError,
@@ -123,6 +136,8 @@ FLAGS: Final[dict[str, str]] = {
     "condition_unresolved": "a condition names a slow signal that is absent or has no value",
     "speed_missing": "the speed signal is absent or covers none of the data",
     "no_speed_step": "no speed plateau long enough for a step",
+    "speed_varies": "the run's speed varies beyond the step tolerance: the mesh line sweeps the "
+                    "PSD, smeared; a natural frequency may be that swept line, not a mode",
     "step_without_block": "a speed step without one whole order block",
     "above_passband": "a mesh harmonic above the angular resampler's passband",
     "arms_failed": "the order analysis of the channel failed",
@@ -384,6 +399,8 @@ def _observe_run(campaign: Campaign, run: CampaignRun, base: dict[str, Any]
             profile = speed_profile(rec, s.speed, pulses_per_rev=s.pulses_per_rev)
         except (MissingSpeedError, ValueError) as exc:
             speed_error = str(exc)
+            run_flags.append("speed_missing")
+            notes.append(f"speed signal {s.speed!r} unusable, no Arms: {speed_error}")
     if base.get("speed_rpm") is None and profile is not None:
         v = profile.speed_rpm[np.isfinite(profile.speed_rpm)]
         if v.size:
@@ -418,9 +435,11 @@ def _observe_run(campaign: Campaign, run: CampaignRun, base: dict[str, Any]
     if profile is not None:
         steps = detect_speed_steps(profile, rel_tolerance=a.step_rel_tolerance,
                                    min_duration_s=a.min_step_duration_s)
+    speed_note = None if profile is None else _speed_varies(profile, a.step_rel_tolerance, z1,
+                                                             z_tracked)
     n_ok = 0
     for name, ca in (analysis.channels.items() if analysis is not None else ()):
-        ch_rows, ok = _channel_rows(base, rec, ca, campaign)
+        ch_rows, ok = _channel_rows(base, rec, ca, campaign, speed_note)
         n_ok += ok
         rows.extend(ch_rows)
         if ca.error:
@@ -443,14 +462,16 @@ def _observe_run(campaign: Campaign, run: CampaignRun, base: dict[str, Any]
         notes.append(f"{len(rep.gaps)} gap(s) in sample counters, "
                      f"{sum(g.n_missing for g in rep.gaps)} sample(s) missing")
     warnings = tuple(f"{run.id}: {n}" for n in notes)
+    child_flags, child_notes = _aggregate(rows)
     run_row = {**base, "quantity": "run", "duration_s": rec.duration_s,
                "n_gaps": len(rep.gaps), "n_rejected": rep.n_rejected,
-               "message": "; ".join(notes), "_flags": run_flags}
+               "message": "; ".join([*child_notes, *notes]),
+               "_flags": [*run_flags, *child_flags]}
     if not names or n_ok == 0:
         why = ("no accelerometer channel in the recording" if not names and not missing else
                "no channel could be analysed")
         run_row.update(status="failed", _flags=[*run_flags, "run_failed"],
-                       message="; ".join(x for x in (why, run_row["message"]) if x))
+                       message="; ".join([why, *notes]))
         out = (_status(run_row), *rows)
         return RunObservations(run.id, str(run.file), out, analysed=False,
                                error=f"{run.file}: {run_row['message']}",
@@ -459,8 +480,48 @@ def _observe_run(campaign: Campaign, run: CampaignRun, base: dict[str, Any]
                            warnings=warnings)
 
 
-def _channel_rows(base: dict[str, Any], rec: Any, ca: ChannelAnalysis, campaign: Campaign
-                  ) -> tuple[list[dict[str, Any]], bool]:
+def _speed_varies(profile: SpeedProfile, rel_tolerance: float, z1: int, z_tracked: int
+                  ) -> str | None:
+    """Why the mesh line is smeared, when the speed spreads beyond the step tolerance; else None.
+
+    The tolerance is :func:`~rigtools.analysis.speed.detect_speed_steps`' (a spread of at most
+    ``2 max(2 rpm, rel_tolerance n_mid)``).
+    """
+    v = profile.speed_rpm[np.isfinite(profile.speed_rpm)]
+    if v.size < 2:
+        return None
+    lo, hi = float(np.min(v)), float(np.max(v))
+    tol = max(2.0, rel_tolerance * 0.5 * (lo + hi))
+    if hi - lo <= 2 * tol:
+        return None
+    f = z_tracked / 60.0  # mesh frequency per rpm of the tracked shaft
+    return (f"speed varies {lo:.0f}-{hi:.0f} rpm (beyond +-{100 * rel_tolerance:g} %): the mesh "
+            f"line sweeps {f * lo:.0f}-{f * hi:.0f} Hz, smeared over the PSD; this peak may be "
+            "the swept mesh line, not a structural mode")
+
+
+def _aggregate(rows: list[dict[str, Any]]) -> tuple[list[str], list[str]]:
+    """The flags of a run's failed or flagged rows, and one note per channel x quantity x status."""
+    flags: list[str] = []
+    groups: dict[tuple[str, str, str], list[str]] = {}
+    for r in rows:
+        if r.get("status") not in ("failed", "flagged"):
+            continue
+        fl = [f for f in r.get("quality_flags", "").split(";") if f]
+        flags.extend(fl)
+        key = (str(r.get("channel")), str(r.get("quantity")), str(r["status"]))
+        groups.setdefault(key, []).extend(fl)
+    notes = []
+    for (ch, q, st), fl in groups.items():
+        n = sum(1 for r in rows if (str(r.get("channel")), str(r.get("quantity")),
+                                    str(r.get("status"))) == (ch, q, st))
+        what = q if n == 1 else f"{n} {q} rows"
+        notes.append(f"{ch}: {what} {st} ({', '.join(dict.fromkeys(fl)) or 'see row'})")
+    return list(dict.fromkeys(flags)), notes
+
+
+def _channel_rows(base: dict[str, Any], rec: Any, ca: ChannelAnalysis, campaign: Campaign,
+                  speed_note: str | None = None) -> tuple[list[dict[str, Any]], bool]:
     """The rms row and the natural_frequency rows of a channel; and whether it was analysed."""
     a = campaign.analysis
     q = ca.quality
@@ -518,6 +579,9 @@ def _channel_rows(base: dict[str, Any], rec: Any, ca: ChannelAnalysis, campaign:
             if pk.prominence_dB < a.low_snr_dB:
                 pflags.append("low_snr")
                 pmsg.append(f"prominence {pk.prominence_dB:.1f} dB < {a.low_snr_dB:g} dB")
+            if speed_note is not None:
+                pflags.append("speed_varies")
+                pmsg.append(speed_note)
             rows.append({
                 **common, "quantity": "natural_frequency", "mode_index": k,
                 "f_n_Hz": _finite(m.f_n_Hz), "f_n_std_Hz": _finite(m.f_n_std_Hz),
@@ -577,10 +641,8 @@ def _arms_rows(base: dict[str, Any], rec: Any, name: str, rms_row: dict[str, Any
         return [_status({**common, "status": "failed", "_flags": ["unit_not_acceleration"],
                          "message": f"unit {rec.channels[name].unit!r} is not an acceleration"})]
     if not steps:
-        return [_status({**common, "status": "failed", "_flags": ["no_speed_step"],
-                         "message": f"no speed plateau of at least {a.min_step_duration_s:g} s "
-                         f"within +-{100 * a.step_rel_tolerance:g} % in {campaign.sensors.speed!r}"
-                         })]
+        return _ramp_rows(common, rec, name, profile, ch_flags, factor, z_tracked, z1, t0,
+                          campaign)
     try:
         sl = step_levels_from_recording(rec, name, profile, z_tracked, steps=steps,
                                         harmonics=_HARMONICS, revs_per_block=a.revs_per_block)
@@ -595,7 +657,7 @@ def _arms_rows(base: dict[str, Any], rec: Any, name: str, rms_row: dict[str, Any
         if n_gaps:
             flags += ["gaps", "windows_dropped"]
             msg.append(f"{n_gaps} stretch(es) of invalid samples or unknown speed in the step")
-        row = {**common, "step_index": i, "step_start_s": st.start_s - t0,
+        row = {**common, "segment": "step", "step_index": i, "step_start_s": st.start_s - t0,
                "step_stop_s": st.stop_s - t0, "n_gaps": n_gaps,
                "n_windows": int(sl.n_blocks[i])}
         if sl.n_blocks[i] == 0:
@@ -617,6 +679,72 @@ def _arms_rows(base: dict[str, Any], rec: Any, name: str, rms_row: dict[str, Any
             **row, "mesh_frequency_Hz": f_mesh, "step_speed_rpm": f_mesh * 60.0 / z1,
             "a1_m_s2": _finite(amp[0]), "a2_m_s2": _finite(amp[1]), "a3_m_s2": _finite(amp[2]),
             "arms_m_s2": _finite(sl.arms[i] * factor), "snr_dB": snr,
+            "message": "; ".join(msg), "_flags": flags}))
+    return rows
+
+
+def _ramp_snr_db(rc: RunUpCurve, i: int) -> float | None:
+    """:func:`_order_floor_snr_db` for window ``i`` of a run-up curve."""
+    o = np.asarray(rc.spectra.axis, np.float64)
+    amp = np.asarray(rc.spectra.amplitude, np.float64)
+    amp = amp[i] if amp.shape[0] == len(rc.time_s) else amp[:, i]
+    z, band, revs = rc.z1, 1, rc.revs_per_window
+    n = revs * rc.samples_per_rev
+    w = np.hanning(n + 1)[:-1] if n > 1 else np.ones(1)
+    enbw = float(n * np.sum(w**2) / np.sum(w) ** 2)
+    sel = (o >= 0.5 * z) & (o <= 3.5 * z) & np.isfinite(amp)
+    for h in rc.harmonics:
+        sel &= np.abs(o - h * z) > (band + 2) / revs
+    if np.count_nonzero(sel) < 8:
+        return None
+    floor = math.sqrt(float(np.median(amp[sel] ** 2)) * (2 * band + 1) / enbw)
+    a = rc.amplitude[i]
+    a = a[np.isfinite(a)]
+    if not a.size or floor <= 0:
+        return None
+    return float(20 * np.log10(np.min(a) / floor))
+
+
+def _ramp_rows(common: dict[str, Any], rec: Any, name: str, profile: SpeedProfile,
+               ch_flags: list[str], factor: float, z_tracked: int, z1: int, t0: float,
+               campaign: Campaign) -> list[dict[str, Any]]:
+    """Arms per window along a speed without plateau (a ramped run-up), ``segment = "ramp"``."""
+    a = campaign.analysis
+    try:
+        rc = run_up_curve_from_recording(rec, name, profile, z_tracked, harmonics=_HARMONICS,
+                                         revs_per_window=a.revs_per_block)
+    except (RigtoolsError, ValueError) as exc:
+        return [_status({**common, "segment": "ramp", "status": "failed",
+                         "message": f"no speed plateau; Arms along the ramp: {exc}",
+                         "_flags": ["arms_failed"]})]
+    if not len(rc.time_s):
+        dropped = ", ".join(f"{n} {why}" for why, n in sorted(rc.dropped.items()))
+        return [_status({**common, "segment": "ramp", "status": "failed",
+                         "message": f"no speed plateau, and no whole window of "
+                         f"{rc.revs_per_window} revolutions along the ramp"
+                         + (f" (dropped: {dropped})" if dropped else ""),
+                         "_flags": ["no_speed_step", "arms_failed"]})]
+    rows = []
+    for i in range(len(rc.time_s)):
+        flags = list(ch_flags)
+        msg = []
+        amp = rc.amplitude[i] * factor
+        if not np.all(np.isfinite(amp)):
+            flags.append("above_passband")
+            msg.append("a mesh harmonic lies above the resampler's passband (NaN)")
+        snr = _ramp_snr_db(rc, i)
+        if snr is not None and snr < a.low_snr_dB:
+            flags.append("low_snr")
+            msg.append(f"weakest mesh harmonic {snr:.1f} dB over the floor < {a.low_snr_dB:g} dB")
+        f_mesh = float(rc.mesh_frequency_Hz[i])  # z_tracked n_tracked / 60 = z1 n_pinion / 60
+        half = 0.5 * rc.revs_per_window * 60.0 / float(rc.speed_rpm[i])
+        t = float(rc.time_s[i]) - t0
+        rows.append(_status({
+            **common, "segment": "ramp", "step_index": i, "step_start_s": t - half,
+            "step_stop_s": t + half, "n_windows": 1, "n_gaps": 0,
+            "mesh_frequency_Hz": f_mesh, "step_speed_rpm": f_mesh * 60.0 / z1,
+            "a1_m_s2": _finite(amp[0]), "a2_m_s2": _finite(amp[1]), "a3_m_s2": _finite(amp[2]),
+            "arms_m_s2": _finite(rc.arms[i] * factor), "snr_dB": snr,
             "message": "; ".join(msg), "_flags": flags}))
     return rows
 

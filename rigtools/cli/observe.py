@@ -1,11 +1,12 @@
 """``rigtools observe CAMPAIGN.toml -o OBS.parquet``: the observations table of a campaign.
 
 Reads and analyses every run of the campaign (ingest, spectra, natural frequencies with damping,
-RMS, Arms per speed step) with a progress bar over runs on stderr (when stderr is a terminal),
-and writes the tidy table (``data_schemas/observations.schema.json``) as Parquet. A run that
-fails is reported on stderr with its file and the reason, recorded in the table, and the others
-go on. Exit 0 when at least one run was analysed, 3 when none could be (or the campaign file
-itself is malformed).
+RMS, Arms per speed step or along a ramp) with a progress bar over runs on stderr (when stderr
+is a terminal, or with ``--progress``), and writes the tidy table
+(``data_schemas/observations.schema.json``) as Parquet. A run that fails is reported on stderr
+with its file and the reason, recorded in the table, and the others go on; a run whose speed
+signal is missing gets a warning naming the run. Exit 0 when at least one run was analysed, 3
+when none could be (or the campaign file itself is malformed).
 """
 
 from __future__ import annotations
@@ -31,16 +32,23 @@ def add_parser(subparsers: Any) -> None:
     )
     p.add_argument("campaign", help="campaign manifest (TOML)")
     p.add_argument("-o", "--output", required=True, help="output .parquet file")
+    p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                   help="show (--progress) or hide (--no-progress) the progress bar over runs "
+                   "on stderr; default: shown when stderr is a terminal")
     p.set_defaults(func=run)
 
 
 class _Progress:
-    """A tqdm bar over runs on stderr, disabled when stderr is not a terminal."""
+    """A tqdm bar over runs on stderr; by default only when stderr is a terminal.
 
-    def __init__(self, total: int) -> None:
+    ``force`` True shows it anyway, False never (``--progress`` / ``--no-progress``).
+    """
+
+    def __init__(self, total: int, force: bool | None = None) -> None:
         self.bar: Any = None
         isatty = getattr(sys.stderr, "isatty", None)
-        if isatty is not None and isatty():
+        show = force if force is not None else bool(isatty is not None and isatty())
+        if show:
             try:
                 from tqdm import tqdm
             except ImportError:  # progress is a nicety; the table is the job
@@ -74,7 +82,13 @@ def _fmt(v: Any, spec: str) -> str:
 
 
 def format_summary(obs: Any) -> str:
-    """One line per run: status, channels analysed, modes, lowest f_n (median), Arms (max)."""
+    """One line per run: status, channels analysed, clean modes, lowest f_n, Arms (max).
+
+    ``modes`` counts clean modes (status ``ok``) over all found: a flagged mode (clipped
+    channel, low SNR, at a mesh line, swept mesh line) is not clean. ``f_n`` and ``zeta`` are
+    the medians over the channels of the lowest clean mode. ``steps`` counts speed steps, or
+    says ``ramp`` when Arms was read along a ramp.
+    """
     df = obs.table
     lines = [f"{'run':<16}{'status':<9}{'channels':>9}{'modes':>7}{'f_n Hz':>10}{'zeta':>8}"
              f"{'steps':>7}{'Arms m/s^2':>12}"]
@@ -84,14 +98,18 @@ def format_summary(obs: Any) -> str:
         status = str(run_row["status"].iloc[0]) if len(run_row) else "-"
         rms = rows[rows["quantity"] == "rms"]
         n_ok = int((rms["status"] != "failed").sum())
-        modes = rows[(rows["quantity"] == "natural_frequency") & (rows["status"] != "failed")]
-        lowest = modes[modes["mode_index"] == 0]
+        found = rows[(rows["quantity"] == "natural_frequency") & (rows["status"] != "failed")]
+        modes = found[found["status"] == "ok"]
+        lowest = modes.sort_values("mode_index").groupby("channel", sort=False).head(1)
         arms = rows[(rows["quantity"] == "arms") & (rows["status"] != "failed")]
+        steps = arms[arms["segment"] != "ramp"]
+        n_steps = "ramp" if len(arms) and not len(steps) else str(steps["step_index"].nunique())
         lines.append(
-            f"{r.run_id:<16}{status:<9}{f'{n_ok}/{len(rms)}':>9}{len(modes):>7}"
+            f"{r.run_id:<16}{status:<9}{f'{n_ok}/{len(rms)}':>9}"
+            f"{f'{len(modes)}/{len(found)}':>7}"
             f"{_fmt(lowest['f_n_Hz'].median() if len(lowest) else None, '.1f'):>10}"
             f"{_fmt(lowest['zeta'].median() if len(lowest) else None, '.4f'):>8}"
-            f"{arms['step_index'].nunique() if len(arms) else 0:>7}"
+            f"{n_steps:>7}"
             f"{_fmt(arms['arms_m_s2'].max() if len(arms) else None, '.3g'):>12}")
     return "\n".join(lines)
 
@@ -102,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
     from rigtools.campaign import load_campaign
 
     campaign = load_campaign(args.campaign)
-    progress = _Progress(len(campaign.runs))
+    progress = _Progress(len(campaign.runs), getattr(args, "progress", None))
 
     def on_run(r: Any) -> None:
         for w in r.warnings:

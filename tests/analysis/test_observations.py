@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -417,3 +418,155 @@ def test_no_run_analysed(tmp_path):
     assert obs.n_analysed == 0 and len(obs.failures) == 3
     assert list(obs.table.quantity) == ["run"] * 3
     assert validate_observations(obs.table) == []
+
+
+# --------------------------------------------------------------------------------------------
+# ramped run-ups, run status from its rows (review findings)
+
+
+def test_ramped_run_up_gives_arms_along_the_ramp_and_flags_the_swept_mesh_line(tmp_path):
+    from scipy.signal import lfilter
+
+    from rigtools.cli.observe import format_summary
+
+    n0, n1, dur, st = 600.0, 3000.0, 2.0, 1_763_800_000.0
+    n = int(FS * dur)
+    t = np.arange(n) / FS
+    rpm = n0 + (n1 - n0) * t / dur
+    theta = np.cumsum(rpm / 60.0) / FS  # pinion revolutions
+    x = sum(a * np.sin(2 * np.pi * h * Z1 * theta) for h, a in zip((1, 2, 3), AMPS, strict=True))
+    rng = np.random.default_rng(0)
+    # plus a structural resonance (white noise through an SDOF at F_N), so the run has a mode
+    r, wd = math.exp(-ZETA * 2 * math.pi * F_N / FS), 2 * math.pi * F_N / FS
+    x = x + rng.normal(0.0, 1.0, n) + 0.05 * lfilter([1.0], [1.0, -2 * r * math.cos(wd), r * r],
+                                                      rng.normal(0.0, 1.0, n))
+    ts = np.arange(0.0, dur, 0.05)
+    slow = {"PinionSpeed_rpm": (st + ts, n0 + (n1 - n0) * ts / dur, "rpm")}
+    write_accel_mcap(tmp_path / "ramp.mcap", {"accel_1": (x, FS, "m/s^2", 0, st)}, slow, None)
+    (tmp_path / "c.toml").write_text("""\
+[campaign]
+name = "ramp"
+gear_set = "fzg-c"
+[sensors]
+accel = ["accel_1"]
+speed = "PinionSpeed_rpm"
+[[run]]
+id = "R"
+file = "ramp.mcap"
+torque_Nm = 300.0
+""")
+    obs = observe_campaign(load_campaign(tmp_path / "c.toml"))
+    df = obs.table
+    assert validate_observations(df) == []
+    arms = rows(df, quantity="arms")
+    # no plateau: Arms per window along the ramp, not a failed no_speed_step row
+    assert len(arms) >= 10 and (arms.segment == "ramp").all() and (arms.status == "ok").all()
+    assert list(arms.step_index) == list(range(len(arms)))
+    assert arms.step_speed_rpm.is_monotonic_increasing
+    assert arms.step_speed_rpm.min() < 1400 and arms.step_speed_rpm.max() > 2500
+    mid = 0.5 * (arms.step_start_s + arms.step_stop_s)
+    np.testing.assert_allclose(arms.step_speed_rpm, n0 + (n1 - n0) * mid / dur, rtol=0.02)
+    np.testing.assert_allclose(arms.mesh_frequency_Hz, Z1 * arms.step_speed_rpm / 60, rtol=1e-9)
+    for col, amp in zip(("a1_m_s2", "a2_m_s2", "a3_m_s2"), AMPS, strict=True):
+        np.testing.assert_allclose(arms[col].median(), amp, rtol=0.05)
+    np.testing.assert_allclose(arms.arms_m_s2.median(), math.sqrt(sum(a * a for a in AMPS)),
+                               rtol=0.05)
+    # the swept mesh line is not reported as a clean mode
+    modes = rows(df, quantity="natural_frequency")
+    assert len(modes) >= 1
+    assert (modes.status == "flagged").all()
+    assert all("speed_varies" in f.split(";") for f in modes.quality_flags)
+    assert all("swept mesh line" in m for m in modes.message)
+    run_row = rows(df, quantity="run").iloc[0]
+    assert run_row.status == "flagged" and "speed_varies" in run_row.quality_flags
+    line = format_summary(obs).splitlines()[1].split()
+    assert line[1] == "flagged" and line[3] == f"0/{len(modes)}" and line[4] == "-"
+    assert line[6] == "ramp"
+
+
+def test_steady_speed_arms_rows_are_steps_and_modes_not_speed_varies(observed):
+    df = observed.table
+    arms = rows(df, run_id="A", quantity="arms")
+    assert len(arms) and (arms.segment == "step").all()
+    modes = rows(df, quantity="natural_frequency")
+    assert not any("speed_varies" in f for f in modes.quality_flags)
+
+
+@pytest.fixture(scope="module")
+def problem_campaign(tmp_path_factory) -> Path:
+    """Runs: clean; a dead (constant) channel; a clipped channel; no speed signal."""
+    d = tmp_path_factory.mktemp("problems")
+    run = synthetic_run(1.0, rng=5, n_channels=2, f_n_Hz=F_N, zeta=ZETA)
+    t = run.start_time_s
+    a1, a2 = run.channels["accel_1"], run.channels["accel_2"]
+    lim = 0.5 * float(np.max(np.abs(a2)))
+    variants = {
+        "clean": {"accel_1": a1, "accel_2": a2},
+        "dead": {"accel_1": a1, "accel_2": np.full(a2.size, 0.3)},
+        "clip": {"accel_1": a1, "accel_2": np.clip(a2, -lim, lim)},
+        "nospeed": {"accel_1": a1, "accel_2": a2},
+    }
+    toml = ['[campaign]\nname = "problems"\ngear_set = "fzg-c"\n[sensors]\n'
+            'accel = ["accel_1", "accel_2"]\nspeed = "PinionSpeed_rpm"\n'
+            '[analysis]\nnperseg = 2048\nmin_step_duration_s = 0.5\n']
+    for rid, ch in variants.items():
+        slow = {k: v for k, v in run.slow.items() if rid != "nospeed" or k != "PinionSpeed_rpm"}
+        write_accel_mcap(d / f"{rid}.mcap", {k: (v, FS, "m/s^2", 0, t) for k, v in ch.items()},
+                         slow, None)
+        toml.append(f'[[run]]\nid = "{rid}"\nfile = "{rid}.mcap"\ntorque_Nm = 302.0\n')
+    (d / "c.toml").write_text("\n".join(toml))
+    return d
+
+
+@pytest.fixture(scope="module")
+def problems(problem_campaign):
+    return observe_campaign(load_campaign(problem_campaign / "c.toml"))
+
+
+def test_run_status_is_flagged_when_a_row_of_the_run_fails_or_is_flagged(problems):
+    df = problems.table
+    assert validate_observations(df) == []
+    assert problems.n_analysed == 4
+    run = {r.run_id: r for r in rows(df, quantity="run").itertuples()}
+    assert run["clean"].status == "ok" and run["clean"].quality_flags == ""
+    # a dead channel: its rms row failed, the run is flagged and says which channel and why
+    assert rows(df, run_id="dead", channel="accel_2", quantity="rms").iloc[0].status == "failed"
+    assert run["dead"].status == "flagged" and "constant" in run["dead"].quality_flags
+    assert "accel_2: rms failed (constant)" in run["dead"].message
+    # a clipped channel
+    assert run["clip"].status == "flagged" and run["clip"].flag_clipping
+    assert "accel_2" in run["clip"].message and "clipping" in run["clip"].message
+    # no speed signal: Arms rows fail, the run is flagged and warns, naming the run
+    arms = rows(df, run_id="nospeed", quantity="arms")
+    assert len(arms) == 2 and (arms.quality_flags == "speed_missing").all()
+    assert run["nospeed"].status == "flagged" and "speed_missing" in run["nospeed"].quality_flags
+    r = next(r for r in problems.runs if r.run_id == "nospeed")
+    assert any(w.startswith("nospeed: ") and "PinionSpeed_rpm" in w for w in r.warnings)
+
+
+def test_clipped_channel_peaks_are_flagged_and_not_clean_modes(problems):
+    from rigtools.cli.observe import format_summary
+
+    df = problems.table
+    clipped = rows(df, run_id="clip", channel="accel_2", quantity="natural_frequency")
+    other = rows(df, run_id="clip", channel="accel_1", quantity="natural_frequency")
+    assert len(clipped) >= 1 and len(other) >= 1
+    assert clipped.flag_clipping.all() and (clipped.status == "flagged").all()
+    assert all("clipping" in f.split(";") for f in clipped.quality_flags)
+    assert not other.flag_clipping.any()
+    lines = {ln.split()[0]: ln.split() for ln in format_summary(problems).splitlines()[1:]}
+    n_clean = int((rows(df, run_id="clip", quantity="natural_frequency").status == "ok").sum())
+    assert n_clean == int((other.status == "ok").sum())
+    assert lines["clip"][3] == f"{n_clean}/{len(clipped) + len(other)}"
+
+
+def test_observe_warns_on_stderr_when_the_speed_signal_is_missing(problem_campaign, tmp_path,
+                                                                  capsys):
+    from rigtools.cli import main
+
+    out = tmp_path / "o.parquet"
+    assert main(["observe", str(problem_campaign / "c.toml"), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert re.search(r"rigtools: warning: nospeed: speed signal 'PinionSpeed_rpm'", err)
+    assert "warning: clean" not in err
+    assert validate_observations(read_observations(out)) == []
