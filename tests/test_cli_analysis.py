@@ -143,11 +143,49 @@ def test_spectrum_exit_codes(files, tmp_path, capsys):
     assert "no channel could be analysed" in cap.err
     assert main(["spectrum", str(tmp_path / "none.mcap")]) == EXIT_UNUSABLE
     assert "no such file" in capsys.readouterr().err
-    assert main(["spectrum", str(files["mcap"]), "--nperseg", "1"]) == EXIT_UNUSABLE
-    assert "`nperseg` must be an integer >= 2" in capsys.readouterr().err
     with pytest.raises(SystemExit) as exc:
         main(["spectrum"])
     assert exc.value.code == 2
+
+
+@pytest.mark.parametrize(("option", "value", "message"), [
+    ("--nperseg", "1", "--nperseg: must be an integer >= 16"),
+    ("--nperseg", "abc", "--nperseg: not an integer"),
+    ("--prominence-dB", "nan", "--prominence-dB: must be finite"),
+    ("--prominence-dB", "-3", "--prominence-dB: must be >= 0"),
+    ("--mesh-frequency-Hz", "inf", "--mesh-frequency-Hz: must be finite"),
+    ("--mesh-frequency-Hz", "0", "--mesh-frequency-Hz: must be > 0"),
+    ("--mesh-frequency-Hz", "-400", "--mesh-frequency-Hz: must be > 0"),
+    ("--z1", "0", "--z1: must be an integer >= 1"),
+])
+def test_spectrum_rejects_bad_options_with_exit_2(files, capsys, option, value, message):
+    with pytest.raises(SystemExit) as exc:
+        main(["spectrum", str(files["mcap"]), option, value])
+    assert exc.value.code == 2
+    assert message in capsys.readouterr().err
+
+
+def test_spectrum_derives_the_mesh_frequency_from_speed_and_z1(files, capsys):
+    # synthetic run: z1 = 16 at 1500 rpm, mesh 400 Hz
+    assert main(["spectrum", str(files["mcap"]), "--nperseg", "2048", "--z1", "16"]) == 0
+    cap = capsys.readouterr()
+    assert cap.err == ""
+    assert "mesh frequency 400 Hz = z1 16 x mean PinionSpeed_rpm" in cap.out
+    # 1.5 s at nperseg 2048: few averages, flagged
+    chan_line = next(ln for ln in cap.out.splitlines()
+                     if ln.startswith("accel_1") and "m/s^2" in ln)
+    dof = float(chan_line.split()[4])
+    assert ("low_dof" in chan_line) == (dof < 35)
+    kinds = [p[4] for p in _peak_lines(cap.out, "accel_1")]
+    assert kinds[:3] == ["mesh_harmonic"] * 3
+    # an explicit mesh frequency wins; a missing speed signal is a warning, not an error
+    assert main(["spectrum", str(files["mcap"]), "--nperseg", "2048", "--z1", "16",
+                 "--mesh-frequency-Hz", "400"]) == 0
+    assert "mesh frequency 400 Hz = " not in capsys.readouterr().out
+    assert main(["spectrum", str(files["mcap"]), "--nperseg", "2048", "--z1", "16",
+                 "--speed-signal", "NoSuch_rpm"]) == 0
+    err = capsys.readouterr().err
+    assert "--z1 given but no slow signal 'NoSuch_rpm'" in err
 
 
 # --------------------------------------------------------------------------------------------
@@ -202,10 +240,19 @@ def test_observe_progress_bar_on_a_terminal(files, tmp_path, capsys, monkeypatch
     import sys
 
     pytest.importorskip("tqdm")
-    monkeypatch.setattr(sys.stderr, "isatty", lambda: True, raising=False)
     camp = tmp_path / "c.toml"
     camp.write_text(CAMPAIGN.replace("runs/", str(files["dir"] / "runs") + "/"))
-    assert main(["observe", str(camp), "-o", str(tmp_path / "o.parquet")]) == 0
+    bar = re.compile(r"observe:\s+\d+%\|[^|\n]*\| [0-3]/3 \[")  # tqdm's l_bar|bar| n/total [
+    # forced on with --progress (stderr is not a terminal under capsys)
+    assert main(["observe", str(camp), "-o", str(tmp_path / "o.parquet"), "--progress"]) == 0
     err = capsys.readouterr().err
-    assert "observe" in err and "run" in err  # tqdm wrote its bar to stderr
+    assert bar.search(err), err
     assert "rigtools: error: run 'LS7-80C' failed" in err
+    # on by default on a terminal
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True, raising=False)
+    assert main(["observe", str(camp), "-o", str(tmp_path / "o.parquet")]) == 0
+    assert bar.search(capsys.readouterr().err)
+    # and off with --no-progress: the error line is there, the bar is not
+    assert main(["observe", str(camp), "-o", str(tmp_path / "o.parquet"), "--no-progress"]) == 0
+    err = capsys.readouterr().err
+    assert not bar.search(err) and "rigtools: error: run 'LS7-80C' failed" in err

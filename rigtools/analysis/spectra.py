@@ -32,7 +32,6 @@ exists but is distorted (harmonics of the clipped waveform), and the caller deci
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -401,6 +400,8 @@ class Spectrum(_WelchBase):
 
     psd_per_Hz: np.ndarray
     average: str = "mean"
+    #: Axis of ``psd_per_Hz`` holding frequency (the ``axis`` the time axis was on).
+    freq_axis: int = -1
 
     @property
     def psd_unit(self) -> str:
@@ -828,7 +829,8 @@ def welch_psd(x: Any, fs: float, *, valid: Any = None, unit: str = "",
                                       props)
     return Spectrum(freq_Hz=freq, unit=unit, fs_Hz=fs, nperseg=nps, noverlap=nov,
                     window=window, detrend=det, account=account,
-                    psd_per_Hz=np.moveaxis(P, -1, axis), average=average)
+                    psd_per_Hz=np.moveaxis(P, -1, axis), average=average,
+                    freq_axis=_norm_axis(axis, P.ndim))
 
 
 def amplitude_spectrum(x: Any, fs: float, *, valid: Any = None, unit: str = "",
@@ -905,8 +907,16 @@ def rms_from_psd(spectrum: Spectrum, band_Hz: Sequence[float] | None = None) -> 
     lo, hi = _check_band(band_Hz, spectrum.fs_Hz)
     f = spectrum.freq_Hz
     sel = (f >= lo) & (f <= hi)
-    ms = np.sum(spectrum.psd_per_Hz[..., sel], axis=-1) * spectrum.resolution_Hz
+    psd = np.asarray(spectrum.psd_per_Hz)
+    if psd.ndim > 1:  # frequency on the axis the time axis was on
+        psd = np.moveaxis(psd, _norm_axis(getattr(spectrum, "freq_axis", -1), psd.ndim), -1)
+    ms = np.sum(psd[..., sel], axis=-1) * spectrum.resolution_Hz
     return np.sqrt(ms)[()]
+
+
+def _norm_axis(axis: int, ndim: int) -> int:
+    """``axis`` in [0, ndim) (-1 when ndim is 0)."""
+    return int(axis) % ndim if ndim else -1
 
 
 def _detrended(seg: np.ndarray, detrend: Any) -> np.ndarray:
@@ -1015,9 +1025,6 @@ def band_rms(x: Any, fs: float, band_Hz: Sequence[float] | None = None, *, valid
             segs = valid_segments(m2[i], nps)
             tot, cnt = _mean_square_time(x2, segs, np.array([i]), fs, band, det)
             ms[i], counts[i] = tot[0] / max(cnt, 1), cnt
-    if spectrum.psd_per_Hz.ndim > 1 and axis not in (-1, xs.ndim - 1):
-        spectrum = dataclasses.replace(spectrum,
-                                       psd_per_Hz=np.moveaxis(spectrum.psd_per_Hz, axis, -1))
     rms_p = rms_from_psd(spectrum, band)
     return BandRMS(band_Hz=band, rms_time=np.sqrt(ms).reshape(batch)[()],
                    rms_parseval=np.asarray(rms_p).reshape(batch)[()], unit=unit,

@@ -17,9 +17,14 @@ from typing import Any
 
 from rigtools.cli._common import add_read_options, read_from_args, warn_losses
 
-__all__ = ["add_parser", "format_spectrum", "plot_spectrum", "run"]
+__all__ = ["add_parser", "format_spectrum", "mesh_frequency_from_speed", "plot_spectrum", "run"]
 
 _EXIT_UNUSABLE = 3
+#: Below this many equivalent dof a channel is flagged ``low_dof`` (as ModalEstimate.low_dof).
+LOW_DOF = 35.0
+#: Shortest Welch window accepted on the command line (samples).
+MIN_NPERSEG = 16
+SPEED_SIGNAL = "PinionSpeed_rpm"
 
 
 def add_parser(subparsers: Any) -> None:
@@ -33,15 +38,89 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("file", help="recording file")
     p.add_argument("--channel", action="append", dest="channels", metavar="C",
                    help="channel to analyse (repeat for several; default all)")
-    p.add_argument("--nperseg", type=int, default=4096, metavar="N",
-                   help="Welch window length in samples (default 4096)")
-    p.add_argument("--mesh-frequency-Hz", dest="mesh_Hz", type=float, default=None, metavar="F",
-                   help="mesh frequency, to tell mesh harmonics from resonances")
-    p.add_argument("--prominence-dB", dest="prominence_dB", type=float, default=6.0,
-                   metavar="DB", help="least prominence of a peak (default 6 dB)")
+    p.add_argument("--nperseg", type=_nperseg, default=4096, metavar="N",
+                   help=f"Welch window length in samples, >= {MIN_NPERSEG} (default 4096)")
+    p.add_argument("--mesh-frequency-Hz", dest="mesh_Hz", type=_positive, default=None,
+                   metavar="F", help="mesh frequency (Hz, > 0), to tell mesh harmonics from "
+                   "resonances; default z1 x mean speed / 60 when --z1 is given and the "
+                   "recording holds the speed signal")
+    p.add_argument("--z1", type=_teeth, default=None, metavar="N",
+                   help="pinion teeth: with the speed signal gives the mesh frequency")
+    p.add_argument("--speed-signal", dest="speed_signal", default=SPEED_SIGNAL, metavar="S",
+                   help=f"slow signal of the pinion speed in rpm (default {SPEED_SIGNAL})")
+    p.add_argument("--prominence-dB", dest="prominence_dB", type=_non_negative, default=6.0,
+                   metavar="DB", help="least prominence of a peak (dB, >= 0, default 6)")
     p.add_argument("--plot", metavar="OUT.png", help="write the PSDs with peaks as a PNG")
     add_read_options(p)
     p.set_defaults(func=run)
+
+
+def _finite(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"must be finite, got {text!r}")
+    return v
+
+
+def _positive(text: str) -> float:
+    v = _finite(text)
+    if not v > 0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text!r}")
+    return v
+
+
+def _non_negative(text: str) -> float:
+    v = _finite(text)
+    if not v >= 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {text!r}")
+    return v
+
+
+def _int_at_least(text: str, least: int) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if v < least:
+        raise argparse.ArgumentTypeError(f"must be an integer >= {least}, got {text!r}")
+    return v
+
+
+def _nperseg(text: str) -> int:
+    return _int_at_least(text, MIN_NPERSEG)
+
+
+def _teeth(text: str) -> int:
+    return _int_at_least(text, 1)
+
+
+def mesh_frequency_from_speed(rec: Any, z1: int, speed_signal: str = "PinionSpeed_rpm"
+                              ) -> tuple[float | None, str]:
+    r"""Mesh frequency :math:`z_1 \bar n / 60` (Hz) from a speed slow signal in rpm.
+
+    Returns the frequency (None when it cannot be derived) and a note saying how it was got
+    or why not.
+    """
+    slow = getattr(rec, "slow", {}) or {}
+    sig = slow.get(speed_signal)
+    if sig is None:
+        return None, (f"no slow signal {speed_signal!r} (the recording holds: "
+                      f"{', '.join(slow) or 'none'})")
+    import numpy as np
+
+    v = np.asarray(sig.values, np.float64)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return None, f"slow signal {speed_signal!r} holds no finite value"
+    rpm = float(np.mean(np.abs(v)))
+    if not rpm > 0:
+        return None, f"slow signal {speed_signal!r} is zero (a standstill)"
+    f_mesh = z1 * rpm / 60.0
+    return f_mesh, (f"mesh frequency {f_mesh:.4g} Hz = z1 {z1} x mean {speed_signal} "
+                    f"{rpm:.5g} rpm / 60")
 
 
 def _f(v: float | None, fmt: str) -> str:
@@ -63,6 +142,8 @@ def _channel_flags(ca: Any) -> str:
         out.append("too_short")
     if ca.spectrum is not None and ca.peaks is None:
         out.append("peaks_failed")
+    if ca.spectrum is not None and 0 < q.dof < LOW_DOF:
+        out.append("low_dof")  # few Welch averages: damping less reliable
     return ",".join(out) or "-"
 
 
@@ -163,8 +244,16 @@ def run(args: argparse.Namespace) -> int:
         print(f"rigtools: error: {args.file}: the recording holds no uniform channel",
               file=sys.stderr)
         return _EXIT_UNUSABLE
+    mesh_Hz = args.mesh_Hz
+    if mesh_Hz is None and getattr(args, "z1", None) is not None:
+        mesh_Hz, note = mesh_frequency_from_speed(rec, args.z1, args.speed_signal)
+        if mesh_Hz is None:
+            print(f"rigtools: warning: {args.file}: --z1 given but {note}: mesh harmonics "
+                  "are not told apart", file=sys.stderr)
+        else:
+            print(note)
     analysis = analyse_recording(rec, channels=args.channels, nperseg=args.nperseg,
-                                 mesh_frequency_Hz=args.mesh_Hz,
+                                 mesh_frequency_Hz=mesh_Hz,
                                  prominence_dB=args.prominence_dB, errors="flag")
     print(format_spectrum(analysis, str(args.file)))
     warn_losses(rec)

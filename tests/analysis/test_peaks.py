@@ -384,3 +384,94 @@ def test_analyse_recording_too_short_and_unknown_channel():
     assert "`nperseg` must be <= len(x)=3000, was 4096" in res["a"].error
     with pytest.raises(SignalError, match=r"`channels` must be names of channels"):
         analyse_recording(rec, channels=["b"])
+
+
+# --------------------------------------------------------------------------------------------
+# few Welch averages: false alarms on noise, honest damping on short records (review findings)
+
+#: (duration s, nperseg) of pure white noise, 20 seeds each. Observed at false_alarm = 0.01:
+#: no structural peak in any of the 100 spectra, one peak of any kind (tonal) in all of them.
+NOISE_CASES = [(1.5, 4096), (2.0, 8192), (3.0, 8192), (2.0, 2048), (10.0, 8192)]
+
+
+@pytest.mark.parametrize(("duration_s", "nperseg"), NOISE_CASES)
+def test_white_noise_gives_no_structural_peak(duration_s, nperseg):
+    n_structural = n_any = 0
+    for seed in range(20):
+        x = np.random.default_rng(1000 + seed).normal(size=int(duration_s * FS))
+        pa = analyse_peaks(welch_psd(x, FS, nperseg=nperseg))
+        n_structural += len(pa.structural)
+        n_any += len(pa.peaks)
+    assert n_structural == 0
+    assert n_any <= 2  # 1 % per spectrum: 0.2 expected over 20
+
+
+def test_detection_threshold_is_the_sidak_corrected_chi2_quantile():
+    from scipy.stats import chi2
+
+    from rigtools.analysis.peaks import _detection_threshold_db
+
+    nu, n, alpha = 21.0, 4096, 0.01
+    hi, spread = _detection_threshold_db(nu, n, alpha)
+    a1 = 1 - (1 - alpha) ** (1 / n)
+    assert hi == pytest.approx(10 * np.log10(chi2.isf(a1, nu) / nu), rel=1e-9)
+    assert spread == pytest.approx(hi - 10 * np.log10(chi2.ppf(a1, nu) / nu), rel=1e-9)
+    # more bins searched or fewer averages: a higher threshold
+    assert _detection_threshold_db(nu, 4 * n, alpha)[0] > hi
+    assert _detection_threshold_db(4 * nu, n, alpha)[0] < hi
+    x = np.random.default_rng(0).normal(size=int(2 * FS))
+    pa = analyse_peaks(welch_psd(x, FS, nperseg=8192), false_alarm=0.001)
+    assert pa.false_alarm == 0.001 and pa.detection_threshold_dB > hi
+    with pytest.raises(SignalError, match="false_alarm"):
+        analyse_peaks(welch_psd(x, FS, nperseg=8192), false_alarm=1.5)
+
+
+#: Short records, f_n 3 kHz, zeta 0.02, SNR 20 dB, 20 seeds (0-19). Observed: found in all;
+#: mean relative zeta error (bias) and scatter, |error|/sigma < 3 in (of 20), z-score sd:
+#:   2 s / 8192 (nu 21):   -2.6 %, 9.3 %, 20, 1.22
+#:   4 s / 8192 (nu 46):   -3.0 %, 4.7 %, 20, 0.96
+#:   2 s / 2048 (nu 93):   -0.9 %, 4.5 %, 20, 0.92
+#:   4 s / 2048 (nu 188):  -2.0 %, 3.1 %, 20, 0.89
+SHORT_CASES = [(2.0, 8192), (4.0, 8192), (2.0, 2048), (4.0, 2048)]
+
+
+@pytest.mark.parametrize(("duration_s", "nperseg"), SHORT_CASES)
+def test_short_records_give_an_honest_damping(duration_s, nperseg):
+    b, a = sdof_impulse_invariant(F_N, ZETA, FS)
+    err, z = [], []
+    for seed in range(20):
+        rng = np.random.default_rng(seed)
+        n = int(duration_s * FS)
+        r = sps.lfilter(b, a, rng.normal(size=n + 20_000))[20_000:]
+        x = r / r.std() + rng.normal(0.0, 0.1, n)  # SNR 20 dB
+        s = welch_psd(x, FS, nperseg=nperseg)
+        pa = analyse_peaks(s)
+        (p,) = pa.structural  # the mode, and no false one
+        m = p.mode
+        assert abs(m.f_n_Hz - F_N) < 30.0
+        assert m.low_dof == (float(s.dof) < 35)
+        err.append(m.zeta / ZETA - 1)
+        z.append((m.zeta - ZETA) / m.zeta_std)
+    err, z = np.array(err), np.abs(np.array(z))
+    assert abs(err.mean()) < 0.06  # bias
+    assert np.median(np.abs(err)) < 0.1
+    assert np.count_nonzero(z < 3) >= 19  # 95 % within 3 sigma: sigma not too small
+    assert np.sqrt(np.mean(z**2)) > 0.5  # ... nor inflated beyond use
+
+
+def test_a_noise_spike_is_not_broad():
+    """A fit whose damping is within 2 sigma of the resolution limit is not structural."""
+    from rigtools.analysis.peaks import ModalEstimate
+
+    x = np.random.default_rng(3).normal(size=int(2 * FS))
+    s = welch_psd(x, FS, nperseg=8192)
+    fit = fit_sdof(s, 6000.0)
+    zres = 1.44 * s.resolution_Hz / (2 * 6000.0)
+    m = ModalEstimate(f_n_Hz=6000.0, f_n_std_Hz=1.0, zeta=1.5 * zres, zeta_std=0.3 * zres,
+                      zeta_half_power=zres, zeta_half_power_std=zres, f_peak_Hz=6000.0,
+                      f_peak_std_Hz=1.0, psd_peak_per_Hz=1.0, zeta_resolution=zres,
+                      fit=fit.__class__(**{**fit.__dict__, "success": True,
+                                           "at_lower_bound": False}),
+                      half_power=half_power_damping(s, 6000.0), dof=float(s.dof),
+                      resolution_Hz=s.resolution_Hz)
+    assert not m.broad and m.low_dof

@@ -357,3 +357,39 @@ def test_clipping_at_the_dbc_full_scale_is_flagged():
 def test_clipping_needs_one_channel():
     with pytest.raises(SignalError, match=r"`x` must be one channel"):
         detect_clipping(np.zeros((2, 10)))
+
+
+@pytest.mark.parametrize("time_axis", [0, 1, -1])
+def test_band_rms_and_rms_from_psd_agree_whatever_the_time_axis(time_axis):
+    from rigtools.analysis.spectra import band_rms, rms_from_psd, welch_psd
+
+    fs = 10_000.0
+    rng = np.random.default_rng(7)
+    x = rng.normal(size=(2, 3, 40_000))  # time last
+    ref = band_rms(x, fs, (50.0, 500.0), nperseg=1024)
+    xa = np.moveaxis(x, -1, time_axis)
+    got = band_rms(xa, fs, (50.0, 500.0), nperseg=1024, axis=time_axis)
+    np.testing.assert_allclose(got.rms_parseval, ref.rms_parseval, rtol=1e-12)
+    np.testing.assert_allclose(got.rms_time, ref.rms_time, rtol=1e-12)
+    spec = welch_psd(xa, fs, nperseg=1024, axis=time_axis)
+    assert spec.psd_per_Hz.shape[time_axis] == 513
+    np.testing.assert_allclose(rms_from_psd(spec, (50.0, 500.0)), ref.rms_parseval,
+                               rtol=1e-12)
+    # a spectrum computed on axis 0 passed back in
+    again = band_rms(xa, fs, (50.0, 500.0), spectrum=spec, axis=time_axis)
+    np.testing.assert_allclose(again.rms_parseval, ref.rms_parseval, rtol=1e-12)
+
+
+def test_axis_0_of_a_two_channel_array():
+    from rigtools.analysis.spectra import band_rms, rms_from_psd, welch_psd
+
+    fs = 10_000.0
+    t = np.arange(100_000) / fs
+    X = np.stack([np.sin(2 * np.pi * 100 * t), 2 * np.sin(2 * np.pi * 200 * t)], axis=1)
+    want = [np.sqrt(0.5), np.sqrt(2.0)]
+    np.testing.assert_allclose(band_rms(X, fs, (50, 500), nperseg=4096, axis=0).rms_parseval,
+                               want, rtol=1e-6)
+    np.testing.assert_allclose(
+        rms_from_psd(welch_psd(X, fs, nperseg=4096, axis=0), (50, 500)), want, rtol=1e-6)
+    np.testing.assert_allclose(rms_from_psd(welch_psd(X.T, fs, nperseg=4096), (50, 500)),
+                               want, rtol=1e-6)
