@@ -1,0 +1,232 @@
+r"""Single-DOF gear-pair models with backlash, non-dimensional (seed 003 Sec. 3, Eqs. 21-31).
+
+Equation (all three models of the seed, one form):
+
+.. math:: \ddot x + 2 \zeta \dot x + \tilde k(\tau)\, f(x - \tilde e(\tau)) = \tilde F
+
+* ``x`` the dynamic transmission error (DTE) ``R_1 theta_1 - R_2 theta_2`` divided by a length
+  ``L`` (default the half backlash ``b``, as in the seed's Eq. 27);
+* ``tau = omega_n t`` with ``omega_n = sqrt(k_0 / m)``, ``k_0`` the mean mesh stiffness of the
+  model and ``m = J_1 J_2 / (J_1 R_2^2 + J_2 R_1^2)`` the equivalent mass (Eq. 24a);
+* ``zeta = c / (2 m omega_n)``; ``tilde F = f_0 / (k_0 L)`` with ``f_0 = T_1 / R_1`` (Eq. 24b);
+* ``Lambda = 2 pi f_m / omega_n``: the mesh period is ``2 pi / Lambda`` in ``tau``;
+* ``tilde k(tau) = k(t) / k_0 = 1 + sum_i tilde k_i cos(i Lambda tau + phi_i)`` and
+  ``tilde e(tau) = e(t) / L``, both truncated Fourier series (Eq. 25) in the cycle phase
+  ``Lambda tau / (2 pi)`` -- exactly :class:`~models.stiffness.mesh_cycle.Harmonics`;
+* ``f`` the **dead-zone** backlash function with half-gap ``tilde b = b / L``::
+
+      f(u) = u - b  (u > b),   0  (|u| <= b),   u + b  (u < -b).
+
+  Seed Eq. 22/27 prints the contact force as ``h k (x - e)`` with ``h in {1, 0, -1}``; that
+  jumps by ``k b`` at ``|u| = b`` and pulls the wrong way in back-side contact (SEED-NOTES
+  16). The dead zone is continuous, has the potential ``V(u) = (|u| - b)^2 / 2`` outside the
+  gap and 0 inside, and is the Kahraman-Singh form. Drive-side contact is ``u > b``, so the
+  static equilibrium at the mean load is ``u = b + tilde F`` (constant stiffness). Damping is
+  viscous on ``x`` at all times (Kahraman-Singh; the seed's ``h c`` form is dropped with h).
+
+The three models of the seed (:func:`sdof_from_mesh_cycle`):
+
+* ``"fvms"`` (Eq. 26): ``k = `` FVMS, ``e`` the gear error as a displacement excitation
+  (given as harmonics in metres; zero by default, i.e. perfect involutes);
+* ``"vvms"`` (Eq. 30): ``k = `` VVMS (secant ``F / x_s``, errors and corner contact inside),
+  no separate error;
+* ``"lste"`` (Eq. 31): constant stiffness ``k_0 = F / mean(x_s)`` and the alternating part of
+  the LSTE as the excitation, so that the quasi-static solution is ``x - b = x_s(t)``
+  exactly (Eq. 31 as printed has no mean load; with it the model keeps the static
+  equilibrium).
+
+References
+----------
+.. [1] W. Yu, C. K. Mechefske, Mech. Mach. Theory 96 (2016) 146-164, Sec. 3 (seed 003).
+.. [2] A. Kahraman, R. Singh, "Non-linear dynamics of a spur gear pair", J. Sound Vib. 142
+   (1990) 49-75 (dead-zone backlash).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from models.errors import ModelError
+from models.stiffness.mesh_cycle import Harmonics, MeshCycle
+
+__all__ = [
+    "MODELS",
+    "SDOFModel",
+    "dead_zone",
+    "dead_zone_potential",
+    "printed_contact_force",
+    "sdof_from_mesh_cycle",
+]
+
+MODELS = ("fvms", "vvms", "lste")
+
+
+def dead_zone(u: ArrayLike, b: float) -> np.ndarray:
+    """Dead-zone backlash function ``f(u)`` (continuous; ``b >= 0`` the half gap)."""
+    u = np.asarray(u, dtype=float)
+    return np.where(u > b, u - b, np.where(u < -b, u + b, 0.0))
+
+
+def dead_zone_potential(u: ArrayLike, b: float) -> np.ndarray:
+    """Potential ``V(u)`` with ``dV/du = f(u)``: ``(|u| - b)^2 / 2`` outside the gap, else 0."""
+    u = np.asarray(u, dtype=float)
+    return 0.5 * np.maximum(np.abs(u) - b, 0.0) ** 2
+
+
+def printed_contact_force(u: ArrayLike, b: float) -> np.ndarray:
+    """Seed Eq. 22 as printed, ``h u`` with ``h = (sgn(u - b) + sgn(u + b)) / 2`` (not used).
+
+    Kept only to document SEED-NOTES 16: it jumps by ``b`` at ``|u| = b``.
+    """
+    u = np.asarray(u, dtype=float)
+    return 0.5 * (np.sign(u - b) + np.sign(u + b)) * u
+
+
+def _zero_series() -> Harmonics:
+    return Harmonics(0.0, np.zeros(0), np.zeros(0))
+
+
+@dataclass(frozen=True)
+class SDOFModel:
+    """Non-dimensional SDOF gear-pair model ``x'' + 2 zeta x' + k(tau) f(x - e(tau)) = F``.
+
+    Attributes
+    ----------
+    zeta : float
+        Damping ratio (-).
+    force : float
+        ``tilde F = f_0 / (k_0 L)`` (-).
+    backlash : float
+        Half gap ``tilde b = b / L`` (-), >= 0; 0 gives a linear spring.
+    stiffness : Harmonics
+        ``tilde k`` over the mesh cycle phase (-), mean 1 by construction.
+    error : Harmonics
+        ``tilde e`` over the mesh cycle phase (-).
+    length_scale_m : float
+        ``L`` (m): dimensional DTE is ``L x``.
+    mean_stiffness_N_m : float
+        ``k_0`` (N/m); ``omega_n = sqrt(k_0 / m)``.
+    kind : str
+        ``"fvms"``, ``"vvms"``, ``"lste"`` or ``"custom"``.
+    """
+
+    zeta: float
+    force: float
+    backlash: float
+    stiffness: Harmonics = field(default_factory=lambda: Harmonics(1.0, np.zeros(0), np.zeros(0)))
+    error: Harmonics = field(default_factory=_zero_series)
+    length_scale_m: float = 1.0
+    mean_stiffness_N_m: float = math.nan
+    kind: str = "custom"
+
+    def __post_init__(self) -> None:
+        if not (self.zeta >= 0 and self.backlash >= 0):
+            raise ModelError("SDOFModel needs zeta >= 0 and backlash >= 0")
+
+    def tables(self, frequency: float, steps_per_period: int) -> tuple[np.ndarray, np.ndarray]:
+        """``tilde k`` and ``tilde e`` at the ``2 N`` half steps of one mesh period.
+
+        Index ``j`` is ``tau = j h / 2`` with ``h = 2 pi / (Lambda N)``; periodic, so a
+        fixed-step RK4 over whole periods needs nothing else. (Independent of ``Lambda``
+        in phase: kept as an argument for clarity.)
+        """
+        del frequency  # the phase grid is the same for every Lambda
+        phase = np.arange(2 * steps_per_period) / (2 * steps_per_period)
+        return (
+            np.ascontiguousarray(self.stiffness(phase), dtype=float),
+            np.ascontiguousarray(self.error(phase), dtype=float),
+        )
+
+    def rhs(self, tau: float, y: np.ndarray, frequency: float) -> np.ndarray:
+        """Right-hand side ``(x', v')`` at continuous time (for ``scipy.integrate.solve_ivp``)."""
+        phase = frequency * tau / (2 * math.pi)
+        k = float(self.stiffness(phase))
+        e = float(self.error(phase))
+        u = y[0] - e
+        b = self.backlash
+        f = u - b if u > b else (u + b if u < -b else 0.0)
+        return np.array([y[1], self.force - 2 * self.zeta * y[1] - k * f])
+
+    def static_dte(self) -> float:
+        """Static DTE at the mean load with the mean stiffness and no excitation: ``b + F``."""
+        return self.backlash + self.force
+
+
+def _scaled(h: Harmonics, scale: float, drop_mean: bool = False) -> Harmonics:
+    return Harmonics(
+        0.0 if drop_mean else h.mean / scale,
+        np.asarray(h.amplitude) / scale,
+        np.asarray(h.phase_rad),
+    )
+
+
+def sdof_from_mesh_cycle(
+    cycle: MeshCycle,
+    kind: str,
+    *,
+    zeta: float,
+    backlash_m: float,
+    error: Harmonics | None = None,
+    length_scale_m: float | None = None,
+    n_harmonics: int | None = None,
+) -> SDOFModel:
+    """The seed's FVMS, VVMS or LSTE model from a :func:`~models.stiffness.mesh_cycle.mesh_cycle`.
+
+    Parameters
+    ----------
+    cycle : MeshCycle
+        Mesh cycle at the operating torque (its ``load_N`` is ``f_0``).
+    kind : {"fvms", "vvms", "lste"}
+    zeta : float
+        Damping ratio.
+    backlash_m : float
+        Half backlash ``b`` on the line of action (m) (Table 3 gives ``2 b``).
+    error : Harmonics, optional
+        Gear error ``e(t)`` (m) for the FVMS model; ignored by the others.
+    length_scale_m : float, optional
+        ``L``; default ``b`` (then ``tilde b = 1``).
+    n_harmonics : int, optional
+        Truncate the series to this many harmonics (default: all of the cycle's).
+    """
+    if kind not in MODELS:
+        raise ModelError(f"unknown SDOF model {kind!r}; expected one of {MODELS}")
+    L = backlash_m if length_scale_m is None else length_scale_m
+    if not L > 0:
+        raise ModelError("length scale must be > 0 (give length_scale_m when backlash is 0)")
+    F = cycle.load_N
+    n = n_harmonics
+
+    def cut(h: Harmonics) -> Harmonics:
+        return h if n is None else Harmonics(h.mean, h.amplitude[:n], h.phase_rad[:n])
+
+    err = _zero_series()
+    if kind == "fvms":
+        h = cut(cycle.fvms_harmonics)
+        k0 = h.mean
+        if error is not None:
+            err = _scaled(cut(error), L)
+    elif kind == "vvms":
+        h = cut(cycle.vvms_harmonics)
+        k0 = h.mean
+    else:
+        hx = cut(cycle.lste_harmonics)
+        if not hx.mean > 0:
+            raise ModelError("LSTE model needs a positive mean LSTE (torque > 0)")
+        k0 = F / hx.mean
+        h = Harmonics(k0, np.zeros(0), np.zeros(0))
+        err = _scaled(hx, L, drop_mean=True)
+    stiffness = _scaled(h, k0)
+    return SDOFModel(
+        zeta=zeta,
+        force=F / (k0 * L),
+        backlash=backlash_m / L,
+        stiffness=stiffness,
+        error=err,
+        length_scale_m=L,
+        mean_stiffness_N_m=k0,
+        kind=kind,
+    )

@@ -1,0 +1,176 @@
+"""SDOF gear dynamics with backlash (seed 003 Sec. 3, Eqs. 21-31; SEED-NOTES 16-17).
+
+Linear limit against the analytic FRF, the dead zone (continuity, equilibrium, energy), the
+compiled RK4 against its plain-Python reference and against solve_ivp, and a coarse sweep
+of the Kahraman-Blankenship pair at 340 N m showing the softening jump (seed Secs. 4-5).
+"""
+
+import numpy as np
+import pytest
+
+from models.dynamics import (
+    SDOFModel,
+    dead_zone,
+    dead_zone_potential,
+    periods,
+    periods_reference,
+    periods_solve_ivp,
+    printed_contact_force,
+    sdof_from_mesh_cycle,
+    settle,
+    steady_state,
+    sweep_up_down,
+)
+from models.errors import ModelError
+from models.geometry import load_gear_set
+from models.stiffness.mesh_cycle import Harmonics, mesh_cycle
+
+KAHRAMAN = load_gear_set("kahraman-blankenship").pair
+TORQUE_NM = 340.0  # seed 003 Secs. 4-5
+HALF_BACKLASH_M = 0.136e-3 / 2  # seed Table 3: 2b = 0.136 mm on the line of action
+ZETA = 0.02  # seed Sec. 4.2
+
+
+def seed_like_compliance(pair=KAHRAMAN):
+    """Parabolic compliance, 40 % higher at the tips, C(HPSTC) F(340 N m) = 16 um (Sec. 5.1)."""
+    sp, E = pair.pitch_point, pair.end_of_contact
+    shape = lambda s: 1 + 0.4 * ((np.asarray(s) - sp) / (E - sp)) ** 2  # noqa: E731
+    F = TORQUE_NM / pair.base_radius(1)
+    cp = 16e-6 / F / float(shape(pair.highest_point_single_contact))
+    return lambda s: cp * shape(s)
+
+
+@pytest.fixture(scope="module")
+def cycle():
+    return mesh_cycle(KAHRAMAN, seed_like_compliance(), TORQUE_NM, n_phases=200)
+
+
+def sine_error(amplitude):
+    return Harmonics(0.0, np.array([amplitude]), np.array([0.0]))
+
+
+# --- dead zone (SEED-NOTES 16) -----------------------------------------------------------------
+def test_dead_zone_is_continuous_and_the_printed_form_jumps_by_b():
+    b, eps = 0.7, 1e-12
+    for edge in (b, -b):
+        assert abs(dead_zone(edge + eps, b) - dead_zone(edge - eps, b)) < 1e-11
+        assert abs(dead_zone_potential(edge + eps, b) - dead_zone_potential(edge - eps, b)) < 1e-11
+        jump = abs(printed_contact_force(edge + eps, b) - printed_contact_force(edge - eps, b))
+        assert jump == pytest.approx(b)  # seed Eq. 22 as printed: a jump of k b
+    u = np.linspace(-3, 3, 6001)
+    np.testing.assert_allclose(
+        np.gradient(dead_zone_potential(u, b), u), dead_zone(u, b), atol=1e-3
+    )
+    np.testing.assert_array_equal(dead_zone([-2.0, -0.5, 0.0, 0.5, 2.0], b), [-1.3, 0, 0, 0, 1.3])
+
+
+def test_static_equilibrium_at_the_mean_load():
+    """Constant stiffness, no excitation: from rest inside the gap to x = b + F."""
+    m = SDOFModel(zeta=0.1, force=0.3, backlash=1.0)
+    (x, v), n, ok = settle(m, 1.0, (0.0, 0.0), tol=1e-10, max_periods=2000)
+    assert ok and n < 2000
+    assert x == pytest.approx(m.static_dte(), abs=1e-8) and abs(v) < 1e-8
+    assert dead_zone(x, 1.0) == pytest.approx(m.force)  # spring force balances the load
+
+
+def test_energy_is_continuous_through_the_gap_and_impacts():
+    """Zeta = 0: v^2/2 + V(x) - F x is conserved while the pair crosses the gap both ways."""
+    m = SDOFModel(zeta=0.0, force=0.2, backlash=1.0)
+    pts, xs, _ = periods(m, 1.0, (1.2, 2.0), 20, steps_per_period=512, record=True)
+    assert xs.min() < -1.0 and xs.max() > 1.0  # drive-side and back-side contact
+    energy = lambda x, v: 0.5 * v**2 + dead_zone_potential(x, 1.0) - m.force * x  # noqa: E731
+    e0 = energy(1.2, 2.0)
+    e = energy(pts[:, 0], pts[:, 1])
+    # bounded, not drifting: RK4 is first order at the kinks; the printed h-form would jump
+    # by b^2 / 2 = 0.28 e0 at every edge crossing
+    assert np.max(np.abs(e - e0)) < 1e-4 * e0
+
+
+# --- linear limit ------------------------------------------------------------------------------
+@pytest.mark.parametrize("lam", [0.5, 0.9, 1.0, 1.3, 2.0])
+def test_linear_limit_matches_the_analytic_frf(lam):
+    """No backlash, k = 1, e = eps cos(Lambda tau): |X| = eps / |1 - Lambda^2 + 2 i zeta Lambda|."""
+    zeta, eps = 0.05, 0.1
+    m = SDOFModel(zeta=zeta, force=0.0, backlash=0.0, error=sine_error(eps))
+    _, fig = steady_state(m, lam, (0.0, 0.0), tol=1e-9, max_periods=5000)
+    exact = eps / abs(1 - lam**2 + 2j * zeta * lam)
+    assert fig["converged"]
+    assert fig["amplitudes"][0] == pytest.approx(exact, rel=1e-3)
+    assert fig["amplitudes"][1] < 1e-6 and fig["amplitudes"][2] < 1e-6
+    assert fig["arms"] == pytest.approx(exact, rel=1e-3)
+
+
+# --- integrators -------------------------------------------------------------------------------
+@pytest.mark.parametrize("kind", ["fvms", "vvms", "lste"])
+def test_compiled_and_reference_rk4_agree(cycle, kind):
+    m = sdof_from_mesh_cycle(cycle, kind, zeta=ZETA, backlash_m=HALF_BACKLASH_M)
+    y0 = (m.static_dte() + 0.5, 0.3)  # starts with contact loss
+    a, _, _ = periods(m, 0.95, y0, 15, steps_per_period=64)
+    b = periods_reference(m, 0.95, y0, 15, steps_per_period=64)
+    np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("kind", "lam", "y_offset", "atol"),
+    [
+        ("vvms", 1.3, 0.0, 1e-6),  # parametric + mesh harmonics, in contact throughout
+        ("lste", 0.7, 0.0, 1e-6),
+        ("fvms", 1.0, 0.0, 1e-6),
+        ("vvms", 0.95, 0.6, 3e-5),  # contact loss: RK4 loses order at the kink
+    ],
+)
+def test_rk4_matches_solve_ivp(cycle, kind, lam, y_offset, atol):
+    m = sdof_from_mesh_cycle(cycle, kind, zeta=ZETA, backlash_m=HALF_BACKLASH_M, n_harmonics=5)
+    y0 = (m.static_dte() + y_offset, 0.0)
+    a, _, _ = periods(m, lam, y0, 4, steps_per_period=512)
+    b = periods_solve_ivp(m, lam, y0, 4, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(a, b, rtol=0, atol=atol)
+
+
+# --- models from the mesh cycle ----------------------------------------------------------------
+def test_models_from_the_mesh_cycle(cycle):
+    for kind in ("fvms", "vvms", "lste"):
+        m = sdof_from_mesh_cycle(cycle, kind, zeta=ZETA, backlash_m=HALF_BACKLASH_M)
+        assert m.stiffness.mean == pytest.approx(1.0)
+        assert m.backlash == pytest.approx(1.0)
+        assert m.force == pytest.approx(cycle.load_N / (m.mean_stiffness_N_m * HALF_BACKLASH_M))
+    lste = sdof_from_mesh_cycle(cycle, "lste", zeta=ZETA, backlash_m=HALF_BACKLASH_M)
+    assert lste.stiffness.amplitude.size == 0 and lste.error.mean == 0.0
+    # quasi-static LSTE model reproduces the LSTE: (x - b) L = x_s(t)
+    tau = np.linspace(0, 1, 7)
+    qs = (lste.force + lste.error(tau)) * HALF_BACKLASH_M
+    np.testing.assert_allclose(qs, cycle.lste_harmonics(tau), rtol=1e-12)
+    assert (
+        sdof_from_mesh_cycle(
+            cycle, "vvms", zeta=ZETA, backlash_m=HALF_BACKLASH_M
+        ).error.amplitude.size
+        == 0
+    )
+    with pytest.raises(ModelError):
+        sdof_from_mesh_cycle(cycle, "ehl", zeta=ZETA, backlash_m=HALF_BACKLASH_M)
+    with pytest.raises(ModelError):
+        SDOFModel(zeta=-0.1, force=0.0, backlash=0.0)
+
+
+# --- Kahraman sweep (seed Secs. 4-5) -----------------------------------------------------------
+def test_kahraman_sweep_shows_the_softening_jump(cycle):
+    """VVMS, zeta = 0.02, 340 N m: up and down sweeps differ below Lambda = 1 (softening)."""
+    m = sdof_from_mesh_cycle(cycle, "vvms", zeta=ZETA, backlash_m=HALF_BACKLASH_M)
+    lam = np.linspace(0.4, 1.4, 30)
+    up, down = sweep_up_down(m, lam, steps_per_period=64, tol=1e-5, max_periods=200)
+    near = (lam > 0.75) & (lam < 0.94)
+    # down sweep stays on the large contact-loss branch; up sweep on the small linear one
+    assert np.all(down.arms[near] > 2 * up.arms[near])
+    assert np.all(down.contact_loss[near]) and not np.any(up.contact_loss[near])
+    # the up sweep jumps up just below Lambda = 1 and loses contact there
+    i_jump = np.argmax(np.diff(up.arms) * (lam[1:] > 0.8))
+    assert 0.85 < lam[i_jump + 1] < 1.0 and up.arms[i_jump + 1] > 2 * up.arms[i_jump]
+    assert up.contact_loss[i_jump + 1]
+    # above resonance the branches coincide; no back-side impact at this load and damping
+    hi = lam > 1.1
+    np.testing.assert_allclose(up.arms[hi], down.arms[hi], rtol=1e-3)
+    assert not up.backside_impact.any() and not down.backside_impact.any()
+    # super-harmonic resonance near Lambda = 0.5 (second mesh harmonic at the natural frequency)
+    sub = (lam > 0.45) & (lam < 0.56)
+    assert up.arms[sub].max() > 2 * up.arms[np.argmin(np.abs(lam - 0.65))]
+    assert up.arms_m[0] == pytest.approx(up.arms[0] * HALF_BACKLASH_M)
