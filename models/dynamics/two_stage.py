@@ -1,0 +1,458 @@
+r"""Two-stage torsional gear model with backlash, non-dimensional (seed 001, two-stage model).
+
+Physical model (seed 001): four rigid gears, torsion only; gears 2 and 3 sit on one rigid
+intermediate shaft (``theta_3 = theta_2``, inertia ``J_23 = J_2 + J_3``); input torque ``T_1``
+on gear 1, load ``T_2`` on gear 4. Mesh forces on the lines of action
+
+.. math:: P_{12} = k_{12}(t) f(q_1 - e_{12}(t); b_{12}) + c_{12} \dot q_1, \qquad
+          P_{34} = k_{34}(t) f(q_3 - e_{34}(t); b_{34}) + c_{34} \dot q_3
+
+with the DTEs ``q_1 = r_1 theta_1 - r_2 theta_2`` and ``q_3 = r_3 theta_2 - r_4 theta_4``
+(base radii) and ``f`` the continuous dead zone of :func:`models.dynamics.sdof.dead_zone`
+(SEED-NOTES 16; the seed's six-state form is garbled: it couples through ``K_12 x_3`` linearly).
+Newton for ``J_1``, ``J_23``, ``J_4`` and subtracting gives the seed's reduction to the two
+relative coordinates (the rigid-body mode drops out):
+
+.. math:: \ddot q_1 + P_{12}/m_1 = r_1 T_1 / J_1 + a P_{34}, \qquad
+          \ddot q_3 + P_{34}/m_3 = r_4 T_2 / J_4 + a P_{12}
+
+with ``1/m_1 = r_1^2/J_1 + r_2^2/J_23``, ``1/m_3 = r_3^2/J_23 + r_4^2/J_4``, ``a = r_2 r_3/J_23``.
+
+Scaling: ``x_1 = q_1 / L``, ``x_3 = q_3 / L``, ``tau = omega_n t`` with
+``omega_n = sqrt(k_1 / m_1)`` (``k_1`` the mean stiffness of stage 1). Then, with ``'`` for
+``d/dtau``, the equations implemented are
+
+.. math::
+    x_1'' + g_1 = F_1 + \mu_1 g_3, \qquad x_3'' + g_3 = F_3 + \mu_3 g_1,
+
+    g_1 = 2\zeta_1 x_1' + \kappa_1(\tau)\, f(x_1 - \varepsilon_1(\tau); \beta_1),
+
+    g_3 = 2\zeta_3 \Omega\, x_3' + \Omega^2 \kappa_3(\tau)\, f(x_3 - \varepsilon_3(\tau); \beta_3),
+
+* ``zeta_1 = c_12 / (2 m_1 omega_n)``, ``Omega^2 = k_3 / (m_3 omega_n^2)`` (stage-2 natural
+  frequency relative to stage 1), ``zeta_3 = c_34 / (2 m_3 Omega omega_n)``;
+* ``mu_1 = a m_3``, ``mu_3 = a m_1`` the coupling through the intermediate shaft
+  (``mu_1 mu_3 < 1`` physically; ``mu = 0`` gives two independent SDOF oscillators);
+* ``F_1 = r_1 T_1 / (J_1 omega_n^2 L)``, ``F_3 = r_4 T_2 / (J_4 omega_n^2 L)``;
+  ``beta_i = b_i / L`` half gaps, ``varepsilon_i = e_i / L``;
+* ``kappa_i = k_i(t) / k_i^{mean} = 1 + sum harmonics`` (:class:`Harmonics`) plus the
+  optional thermal part ``k_w / k_i^{mean}`` (seed: ``k = k_t + k_w``), also a
+  :class:`Harmonics` (a constant thermal stiffness is a series with mean only);
+* stage 1 meshes at ``Lambda`` (period ``2 pi / Lambda`` in ``tau``); stage 2 at
+  ``(p/q) Lambda`` with ``p/q = z_3/z_2`` reduced, so the excitation repeats every ``q``
+  stage-1 mesh periods (one *system period*).
+
+The integrator is the fixed-step RK4 of :mod:`models.dynamics.integrate` with the step a
+whole fraction of the stage-1 mesh period; tables of ``kappa`` and ``varepsilon`` at the
+``2 q N`` half steps of a system period, compiled (numba) and plain-Python reference with
+the same operations in the same order.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit
+
+from models.errors import ModelError
+from models.stiffness.mesh_cycle import Harmonics
+
+__all__ = [
+    "MeshStage",
+    "TwoStageModel",
+    "TwoStageResponse",
+    "static_state",
+    "two_stage_from_gear_sets",
+    "two_stage_periods",
+    "two_stage_periods_reference",
+    "two_stage_steady_response",
+]
+
+
+def _unit() -> Harmonics:
+    return Harmonics(1.0, np.zeros(0), np.zeros(0))
+
+
+def _zero() -> Harmonics:
+    return Harmonics(0.0, np.zeros(0), np.zeros(0))
+
+
+@dataclass(frozen=True)
+class MeshStage:
+    """One mesh, non-dimensional.
+
+    Attributes
+    ----------
+    zeta : float
+        Damping ratio of the stage (-).
+    backlash : float
+        Half gap ``beta = b / L`` (-), >= 0; 0 gives a linear spring.
+    stiffness : Harmonics
+        ``k_t / k_mean`` over the stage's mesh-cycle phase (mean 1 for a normalised series).
+    error : Harmonics
+        Static transmission error ``e / L`` over the mesh-cycle phase.
+    thermal : Harmonics or None
+        Temperature stiffness ``k_w / k_mean`` (seed: ``k = k_t + k_w``); ``None``: none.
+    """
+
+    zeta: float
+    backlash: float
+    stiffness: Harmonics = field(default_factory=_unit)
+    error: Harmonics = field(default_factory=_zero)
+    thermal: Harmonics | None = None
+
+    def __post_init__(self) -> None:
+        if not (self.zeta >= 0 and self.backlash >= 0):
+            raise ModelError("MeshStage needs zeta >= 0 and backlash >= 0")
+
+    def kappa(self, phase: np.ndarray) -> np.ndarray:
+        """``kappa = k_t/k_mean + k_w/k_mean`` at cycle phases ``phase`` (-)."""
+        k = np.asarray(self.stiffness(phase), dtype=float)
+        if self.thermal is not None:
+            k = k + np.asarray(self.thermal(phase), dtype=float)
+        return k
+
+
+@dataclass(frozen=True)
+class TwoStageModel:
+    """Non-dimensional two-stage model (equations in the module docstring).
+
+    Attributes
+    ----------
+    stage1, stage2 : MeshStage
+    force1, force2 : float
+        ``F_1``, ``F_3`` (-).
+    omega2 : float
+        ``Omega``: stage-2 natural frequency over stage 1's (-), > 0.
+    coupling1, coupling2 : float
+        ``mu_1`` (stage-2 force in stage-1 equation), ``mu_3`` (the converse).
+    mesh_ratio : tuple[int, int]
+        ``(p, q)``: stage-2 mesh frequency is ``p/q`` times stage 1's.
+    """
+
+    stage1: MeshStage
+    stage2: MeshStage
+    force1: float
+    force2: float
+    omega2: float = 1.0
+    coupling1: float = 0.0
+    coupling2: float = 0.0
+    mesh_ratio: tuple[int, int] = (1, 1)
+
+    def __post_init__(self) -> None:
+        p, q = self.mesh_ratio
+        if not (int(p) >= 1 and int(q) >= 1 and self.omega2 > 0):
+            raise ModelError("TwoStageModel needs positive mesh_ratio integers and omega2 > 0")
+        if not self.coupling1 * self.coupling2 < 1:
+            raise ModelError("coupling1 * coupling2 must be < 1 (positive-definite mass)")
+
+    def tables(self, steps_per_period: int) -> np.ndarray:
+        """``(4, 2 q N)``: ``kappa_1, eps_1, kappa_3, eps_3`` at the half steps of a system period.
+
+        Half step ``j`` is ``tau = j h / 2``, ``h = 2 pi / (Lambda N)``; stage-1 phase
+        ``j / (2N)`` and stage-2 phase ``p j / (2 q N)``, both taken modulo 1 on the integer grid.
+        """
+        p, q = (int(v) for v in self.mesh_ratio)
+        n = int(steps_per_period)
+        j = np.arange(2 * q * n)
+        ph1 = (j % (2 * n)) / (2 * n)
+        ph3 = ((p * j) % (2 * q * n)) / (2 * q * n)
+        return np.ascontiguousarray(
+            np.vstack(
+                [
+                    self.stage1.kappa(ph1),
+                    self.stage1.error(ph1),
+                    self.stage2.kappa(ph3),
+                    self.stage2.error(ph3),
+                ]
+            ),
+            dtype=float,
+        )
+
+    def params(self) -> np.ndarray:
+        """``(zeta1, b1, zeta3, b3, F1, F3, Omega, mu1, mu3)`` for the kernels."""
+        s1, s2 = self.stage1, self.stage2
+        return np.array(
+            [
+                s1.zeta,
+                s1.backlash,
+                s2.zeta,
+                s2.backlash,
+                self.force1,
+                self.force2,
+                self.omega2,
+                self.coupling1,
+                self.coupling2,
+            ],
+            dtype=float,
+        )
+
+
+# ----------------------------------------------------------------------------- kernels
+@njit(cache=True)
+def _dz(u, b):  # pragma: no cover - compiled
+    if u > b:
+        return u - b
+    if u < -b:
+        return u + b
+    return 0.0
+
+
+@njit(cache=True)
+def _acc(x1, v1, x3, v3, k1, e1, k3, e3, P):  # pragma: no cover - compiled
+    g1 = 2.0 * P[0] * v1 + k1 * _dz(x1 - e1, P[1])
+    g3 = 2.0 * P[2] * P[6] * v3 + P[6] * P[6] * k3 * _dz(x3 - e3, P[3])
+    return P[4] - g1 + P[7] * g3, P[5] - g3 + P[8] * g1
+
+
+@njit(cache=True)
+def _run(y, P, T, h, n_sys, rec):  # pragma: no cover - compiled
+    """``n_sys`` system periods from ``y``; Poincare points and, if ``rec``, (x1,u1,x3,u3)."""
+    m = T.shape[1] // 2
+    x1, v1, x3, v3 = y[0], y[1], y[2], y[3]
+    pts = np.empty((n_sys, 4))
+    hist = np.empty((n_sys * m if rec else 0, 4))
+    i = 0
+    for s in range(n_sys):
+        for j in range(m):
+            j0 = 2 * j
+            j1 = j0 + 1
+            j2 = (j0 + 2) % (2 * m)
+            if rec:
+                hist[i, 0] = x1
+                hist[i, 1] = x1 - T[1, j0]
+                hist[i, 2] = x3
+                hist[i, 3] = x3 - T[3, j0]
+            a1, b1 = _acc(x1, v1, x3, v3, T[0, j0], T[1, j0], T[2, j0], T[3, j0], P)
+            x1b = x1 + 0.5 * h * v1
+            v1b = v1 + 0.5 * h * a1
+            x3b = x3 + 0.5 * h * v3
+            v3b = v3 + 0.5 * h * b1
+            a2, b2 = _acc(x1b, v1b, x3b, v3b, T[0, j1], T[1, j1], T[2, j1], T[3, j1], P)
+            x1c = x1 + 0.5 * h * v1b
+            v1c = v1 + 0.5 * h * a2
+            x3c = x3 + 0.5 * h * v3b
+            v3c = v3 + 0.5 * h * b2
+            a3, b3 = _acc(x1c, v1c, x3c, v3c, T[0, j1], T[1, j1], T[2, j1], T[3, j1], P)
+            x1d = x1 + h * v1c
+            v1d = v1 + h * a3
+            x3d = x3 + h * v3c
+            v3d = v3 + h * b3
+            a4, b4 = _acc(x1d, v1d, x3d, v3d, T[0, j2], T[1, j2], T[2, j2], T[3, j2], P)
+            x1n = x1 + h / 6.0 * (v1 + 2.0 * v1b + 2.0 * v1c + v1d)
+            v1n = v1 + h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
+            x3n = x3 + h / 6.0 * (v3 + 2.0 * v3b + 2.0 * v3c + v3d)
+            v3n = v3 + h / 6.0 * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
+            x1, v1, x3, v3 = x1n, v1n, x3n, v3n
+            i += 1
+        pts[s, 0] = x1
+        pts[s, 1] = v1
+        pts[s, 2] = x3
+        pts[s, 3] = v3
+    return pts, hist
+
+
+def _setup(model: TwoStageModel, frequency: float, steps_per_period: int):
+    if not frequency > 0 or steps_per_period < 4:
+        raise ModelError("need frequency > 0 and steps_per_period >= 4")
+    h = 2.0 * math.pi / (frequency * steps_per_period)
+    return model.params(), model.tables(steps_per_period), h
+
+
+def two_stage_periods(
+    model: TwoStageModel,
+    frequency: float,
+    y0,
+    n_periods: int,
+    *,
+    steps_per_period: int = 128,
+    record: bool = False,
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """Integrate ``n_periods`` *system* periods (``q`` stage-1 mesh periods each), compiled.
+
+    ``frequency`` is ``Lambda`` (stage-1 mesh frequency over ``omega_n``); ``y0`` is
+    ``(x1, x1', x3, x3')``; ``steps_per_period`` counts RK4 steps per stage-1 mesh period.
+    Returns the Poincare points ``(n_periods, 4)`` and, with ``record``, ``(x1, u1, x3, u3)``
+    at every step start (``u = x - eps``), shape ``(n_periods q N, 4)``.
+    """
+    P, T, h = _setup(model, frequency, steps_per_period)
+    y = np.asarray(y0, dtype=float).reshape(4)
+    pts, hist = _run(y, P, T, h, int(n_periods), bool(record))
+    return pts, (hist if record else None)
+
+
+def two_stage_periods_reference(
+    model: TwoStageModel, frequency: float, y0, n_periods: int, *, steps_per_period: int = 128
+) -> np.ndarray:
+    """Same scheme, same operation order, plain Python: Poincare points ``(n_periods, 4)``."""
+    P, T, h = _setup(model, frequency, steps_per_period)
+    z1, b1_, z3, b3_, F1, F3, Om, mu1, mu3 = P.tolist()
+    K1, E1, K3, E3 = (row.tolist() for row in T)
+    m = len(K1) // 2
+
+    def dz(u, b):
+        return u - b if u > b else (u + b if u < -b else 0.0)
+
+    def acc(x1, v1, x3, v3, j):
+        g1 = 2.0 * z1 * v1 + K1[j] * dz(x1 - E1[j], b1_)
+        g3 = 2.0 * z3 * Om * v3 + Om * Om * K3[j] * dz(x3 - E3[j], b3_)
+        return F1 - g1 + mu1 * g3, F3 - g3 + mu3 * g1
+
+    x1, v1, x3, v3 = (float(v) for v in np.asarray(y0, dtype=float).reshape(4))
+    pts = np.empty((n_periods, 4))
+    for s in range(n_periods):
+        for j in range(m):
+            j0, j1, j2 = 2 * j, 2 * j + 1, (2 * j + 2) % (2 * m)
+            a1, c1 = acc(x1, v1, x3, v3, j0)
+            x1b, v1b = x1 + 0.5 * h * v1, v1 + 0.5 * h * a1
+            x3b, v3b = x3 + 0.5 * h * v3, v3 + 0.5 * h * c1
+            a2, c2 = acc(x1b, v1b, x3b, v3b, j1)
+            x1c, v1c = x1 + 0.5 * h * v1b, v1 + 0.5 * h * a2
+            x3c, v3c = x3 + 0.5 * h * v3b, v3 + 0.5 * h * c2
+            a3, c3 = acc(x1c, v1c, x3c, v3c, j1)
+            x1d, v1d = x1 + h * v1c, v1 + h * a3
+            x3d, v3d = x3 + h * v3c, v3 + h * c3
+            a4, c4 = acc(x1d, v1d, x3d, v3d, j2)
+            x1, v1, x3, v3 = (
+                x1 + h / 6.0 * (v1 + 2.0 * v1b + 2.0 * v1c + v1d),
+                v1 + h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
+                x3 + h / 6.0 * (v3 + 2.0 * v3b + 2.0 * v3c + v3d),
+                v3 + h / 6.0 * (c1 + 2.0 * c2 + 2.0 * c3 + c4),
+            )
+        pts[s] = (x1, v1, x3, v3)
+    return pts
+
+
+# ----------------------------------------------------------------------------- steady response
+@dataclass(frozen=True)
+class TwoStageResponse:
+    """Steady response at one mesh frequency (non-dimensional, units of ``L``).
+
+    ``peak`` is max ``|x|`` (peak |DTE|), ``amplitude`` half the peak-to-peak of ``x``;
+    ``contact_loss`` true if ``|x - eps| <= beta`` at any recorded step (with ``beta > 0``),
+    ``back_contact`` if ``x - eps < -beta`` (back-side impact). Index 0 stage 1, 1 stage 2.
+    ``history`` is ``(x1, u1, x3, u3)`` over the recorded periods.
+    """
+
+    frequency: float
+    peak: tuple[float, float]
+    amplitude: tuple[float, float]
+    contact_loss: tuple[bool, bool]
+    back_contact: tuple[bool, bool]
+    state: np.ndarray
+    history: np.ndarray
+
+
+def two_stage_steady_response(
+    model: TwoStageModel,
+    frequency: float,
+    y0=None,
+    *,
+    transient_periods: int = 200,
+    record_periods: int = 20,
+    steps_per_period: int = 128,
+) -> TwoStageResponse:
+    """Drop ``transient_periods`` system periods, then record ``record_periods`` of them.
+
+    ``y0`` defaults to the static equilibrium with mean stiffness and no error (drive-side
+    contact): ``g_1 = (F_1 + mu_1 F_3)/(1 - mu_1 mu_3)``, ``g_3 = F_3 + mu_3 g_1``.
+    """
+    if y0 is None:
+        y0 = static_state(model)
+    pts, _ = two_stage_periods(
+        model, frequency, y0, transient_periods, steps_per_period=steps_per_period
+    )
+    start = pts[-1] if transient_periods > 0 else np.asarray(y0, dtype=float)
+    pts2, hist = two_stage_periods(
+        model, frequency, start, record_periods, steps_per_period=steps_per_period, record=True
+    )
+    assert hist is not None
+    b = (model.stage1.backlash, model.stage2.backlash)
+    peak = tuple(float(np.max(np.abs(hist[:, c]))) for c in (0, 2))
+    amp = tuple(float(np.ptp(hist[:, c]) / 2) for c in (0, 2))
+    loss = tuple(bool(b[i] > 0 and np.any(np.abs(hist[:, 2 * i + 1]) <= b[i])) for i in (0, 1))
+    back = tuple(bool(np.any(hist[:, 2 * i + 1] < -b[i])) for i in (0, 1))
+    return TwoStageResponse(float(frequency), peak, amp, loss, back, pts2[-1], hist)
+
+
+def static_state(model: TwoStageModel) -> np.ndarray:
+    """Static equilibrium ``(x1, 0, x3, 0)`` at mean stiffness (thermal mean included), no error."""
+    mu1, mu3 = model.coupling1, model.coupling2
+    g1 = (model.force1 + mu1 * model.force2) / (1 - mu1 * mu3)
+    g3 = model.force2 + mu3 * g1
+    k1 = _mean_kappa(model.stage1)
+    k3 = _mean_kappa(model.stage2)
+    x1 = g1 / k1
+    x3 = g3 / (model.omega2**2 * k3)
+    x1 += math.copysign(model.stage1.backlash, x1)
+    x3 += math.copysign(model.stage2.backlash, x3)
+    return np.array([x1, 0.0, x3, 0.0])
+
+
+def _mean_kappa(s: MeshStage) -> float:
+    return s.stiffness.mean + (s.thermal.mean if s.thermal is not None else 0.0)
+
+
+# ----------------------------------------------------------------------------- gear sets
+def two_stage_from_gear_sets(
+    stage1_set,
+    stage2_set,
+    *,
+    mean_stiffness_N_m: tuple[float, float],
+    input_torque_Nm: float,
+    half_backlash_m: tuple[float, float],
+    zeta: tuple[float, float] = (0.05, 0.05),
+    length_scale_m: float | None = None,
+    stiffness: tuple[Harmonics, Harmonics] | None = None,
+    error_m: tuple[Harmonics, Harmonics] | None = None,
+    thermal: tuple[Harmonics | None, Harmonics | None] = (None, None),
+) -> tuple[TwoStageModel, dict]:
+    """Build the model from two :class:`~models.geometry.GearSet` s (gears 1-2 and 3-4).
+
+    Inertias of solid steel discs at the base radius (``J = pi rho w r^4 / 2``, face width
+    of the pair; no bores, shafts rigid), base radii as lever arms, load torque
+    ``T_2 = T_1 (r_2 r_4)/(r_1 r_3)`` (static balance). ``stiffness`` are normalised series
+    (mean 1), ``error_m`` in metres, ``thermal`` normalised by the stage mean stiffness.
+    Returns the model and a dict of the dimensional scales (``omega_n``, ``L``, ``m1``,
+    ``m3``, inertias).
+    """
+    p1, p2 = stage1_set.pair, stage2_set.pair
+    r1, r2 = p1.base_radius(1), p1.base_radius(2)
+    r3, r4 = p2.base_radius(1), p2.base_radius(2)
+
+    def disc(pair, r, g):
+        mat = (pair.pinion if g == 1 else pair.wheel).material
+        return math.pi * mat.density_kg_m3 * pair.face_width_m * r**4 / 2
+
+    J1, J23, J4 = disc(p1, r1, 1), disc(p1, r2, 2) + disc(p2, r3, 1), disc(p2, r4, 2)
+    m1 = 1.0 / (r1**2 / J1 + r2**2 / J23)
+    m3 = 1.0 / (r3**2 / J23 + r4**2 / J4)
+    a = r2 * r3 / J23
+    k1, k3 = mean_stiffness_N_m
+    wn = math.sqrt(k1 / m1)
+    L = half_backlash_m[0] if length_scale_m is None else length_scale_m
+    if not L > 0:
+        raise ModelError("length scale must be > 0 (give length_scale_m when backlash is 0)")
+    T1 = input_torque_Nm
+    T2 = T1 * r2 * r4 / (r1 * r3)
+    z2, z3 = p1.wheel.teeth, p2.pinion.teeth
+    g = math.gcd(z3, z2)
+    st = stiffness or (_unit(), _unit())
+    er = error_m or (_zero(), _zero())
+
+    def scaled(hh: Harmonics) -> Harmonics:
+        return Harmonics(hh.mean / L, np.asarray(hh.amplitude) / L, np.asarray(hh.phase_rad))
+
+    model = TwoStageModel(
+        stage1=MeshStage(zeta[0], half_backlash_m[0] / L, st[0], scaled(er[0]), thermal[0]),
+        stage2=MeshStage(zeta[1], half_backlash_m[1] / L, st[1], scaled(er[1]), thermal[1]),
+        force1=r1 * T1 / (J1 * wn**2 * L),
+        force2=r4 * T2 / (J4 * wn**2 * L),
+        omega2=math.sqrt(k3 / (m3 * wn**2)),
+        coupling1=a * m3,
+        coupling2=a * m1,
+        mesh_ratio=(z3 // g, z2 // g),
+    )
+    return model, {"omega_n": wn, "L": L, "m1": m1, "m3": m3, "J": (J1, J23, J4), "T2": T2}

@@ -1,0 +1,161 @@
+"""Two-stage torsional gear model of seed 001 (two relative DTE coordinates, dead-zone backlash).
+
+Compiled RK4 against its plain-Python reference, the linear limit against the analytic 2-DOF
+frequency response, the decoupled limit against the SDOF integrator, and the gear-set builder.
+"""
+
+import numpy as np
+import pytest
+
+from models.dynamics import (
+    MeshStage,
+    SDOFModel,
+    TwoStageModel,
+    periods,
+    static_state,
+    two_stage_from_gear_sets,
+    two_stage_periods,
+    two_stage_periods_reference,
+    two_stage_steady_response,
+)
+from models.errors import ModelError
+from models.geometry import load_gear_set
+from models.stiffness.mesh_cycle import Harmonics
+
+
+def series(mean, amps, phases=None):
+    a = np.asarray(amps, dtype=float)
+    return Harmonics(mean, a, np.zeros_like(a) if phases is None else np.asarray(phases, float))
+
+
+def nonlinear_model(**kw):
+    s1 = MeshStage(
+        0.05,
+        1.0,
+        series(1.0, [0.2, 0.05], [0.3, -1.0]),
+        series(0.0, [0.3]),
+        thermal=series(0.05, [0.02]),
+    )
+    s2 = MeshStage(0.04, 1.0, series(1.0, [0.25]), series(0.0, [0.2], [0.7]))
+    args = dict(
+        force1=0.1, force2=0.12, omega2=0.8, coupling1=0.3, coupling2=0.4, mesh_ratio=(1, 2)
+    )
+    args.update(kw)
+    return TwoStageModel(s1, s2, **args)
+
+
+def test_compiled_matches_reference():
+    m = nonlinear_model()
+    y0 = [0.5, 0.1, -0.3, 0.0]
+    fast, _ = two_stage_periods(m, 1.3, y0, 12, steps_per_period=64)
+    ref = two_stage_periods_reference(m, 1.3, y0, 12, steps_per_period=64)
+    np.testing.assert_allclose(fast, ref, rtol=0, atol=1e-12)
+    # the run crosses the gap (nonlinear branch exercised)
+    r = two_stage_steady_response(
+        m, 1.3, y0, transient_periods=0, record_periods=12, steps_per_period=64
+    )
+    assert r.contact_loss[0] or r.contact_loss[1]
+
+
+@pytest.mark.parametrize("stage", [0, 1])
+def test_linear_limit_matches_analytic_frf(stage):
+    z1, z3, Om, mu1, mu3, a, lam = 0.05, 0.07, 1.4, 0.3, 0.45, 0.1, 0.9
+    err = series(0.0, [a])
+    s1 = MeshStage(z1, 0.0, error=err if stage == 0 else series(0.0, []))
+    s2 = MeshStage(z3, 0.0, error=err if stage == 1 else series(0.0, []))
+    m = TwoStageModel(
+        s1, s2, force1=0.2, force2=0.1, omega2=Om, coupling1=mu1, coupling2=mu3, mesh_ratio=(1, 1)
+    )
+    N = 128
+    r = two_stage_steady_response(
+        m, lam, transient_periods=400, record_periods=4, steps_per_period=N
+    )
+    # analytic: X exp(i lam tau); eps = a exp(i lam tau) on the excited stage
+    w = 1j * lam
+    d1 = 2 * z1 * w + 1
+    d3 = 2 * z3 * Om * w + Om**2
+    A = np.array([[w**2 + d1, -mu1 * d3], [-mu3 * d1, w**2 + d3]])
+    rhs = np.array([a, -mu3 * a]) if stage == 0 else np.array([-mu1 * Om**2 * a, Om**2 * a])
+    X = np.linalg.solve(A, rhs)
+    for c, Xi in ((0, X[0]), (2, X[1])):
+        x = r.history[:, c]
+        c1 = 2 * np.mean(x * np.exp(-1j * lam * np.arange(x.size) * 2 * np.pi / (lam * N)))
+        assert abs(c1 - Xi) < 1e-3 * abs(Xi)
+        assert r.amplitude[c // 2] == pytest.approx(abs(Xi), rel=1e-3)
+    # mean equals the static state
+    np.testing.assert_allclose(
+        r.history[:, [0, 2]].mean(axis=0), static_state(m)[[0, 2]], rtol=1e-9
+    )
+    assert r.contact_loss == (False, False)
+
+
+def test_decoupled_limit_is_two_sdof_oscillators():
+    m = nonlinear_model(coupling1=0.0, coupling2=0.0, omega2=1.0)
+    s1, s2 = m.stage1, m.stage2
+    lam, N, n = 1.1, 64, 8  # few periods: round-off (different operation order) grows at impacts
+    y0 = [0.4, 0.0, 0.2, -0.1]
+    pts, _ = two_stage_periods(m, lam, y0, n, steps_per_period=N)
+    # stage 2 alone: SDOF at mesh frequency lam / 2, 2N steps per its period
+    sd2 = SDOFModel(s2.zeta, m.force2, s2.backlash, s2.stiffness, s2.error)
+    p2, _, _ = periods(sd2, lam / 2, (y0[2], y0[3]), n, steps_per_period=2 * N)
+    np.testing.assert_allclose(pts[:, 2:], p2, rtol=0, atol=1e-10)
+    # stage 1 alone (no thermal part, so the SDOF stiffness series is the same object)
+    m0 = TwoStageModel(
+        MeshStage(s1.zeta, s1.backlash, s1.stiffness, s1.error),
+        s2,
+        m.force1,
+        m.force2,
+        1.0,
+        0.0,
+        0.0,
+        (1, 2),
+    )
+    pts0, _ = two_stage_periods(m0, lam, y0, n, steps_per_period=N)
+    sd1 = SDOFModel(s1.zeta, m.force1, s1.backlash, s1.stiffness, s1.error)
+    p1, _, _ = periods(sd1, lam, (y0[0], y0[1]), 2 * n, steps_per_period=N)
+    np.testing.assert_allclose(pts0[:, :2], p1[1::2], rtol=0, atol=1e-10)
+
+
+def test_thermal_component_adds_to_stiffness():
+    m = nonlinear_model()
+    T = m.tables(16)
+    ph = (np.arange(32) % 32) / 32
+    np.testing.assert_allclose(T[0, :32], m.stage1.stiffness(ph) + m.stage1.thermal(ph))
+    # stage 2 runs at half the mesh frequency: its table spans one cycle over 2 stage-1 cycles
+    np.testing.assert_allclose(T[2], m.stage2.stiffness(np.arange(64) / 64))
+
+
+def test_from_gear_sets_static_balance():
+    g1 = load_gear_set("two-stage-45-steel")
+    g2 = load_gear_set("two-stage-45-steel-stage2")
+    m, sc = two_stage_from_gear_sets(
+        g1,
+        g2,
+        mean_stiffness_N_m=(4e8, 4.5e8),
+        input_torque_Nm=200.0,
+        half_backlash_m=(50e-6, 50e-6),
+    )
+    assert m.mesh_ratio == (1, 2)
+    assert 0 < m.coupling1 * m.coupling2 < 1
+    y = static_state(m)
+    assert y[0] > m.stage1.backlash and y[2] > m.stage2.backlash  # drive-side contact
+    r = two_stage_steady_response(
+        m, 0.5, transient_periods=5, record_periods=2, steps_per_period=32
+    )
+    np.testing.assert_allclose(
+        r.history[:, [0, 2]], np.broadcast_to(y[[0, 2]], (128, 2)), rtol=1e-9
+    )
+    # static mesh forces: P12 = T1 / r1 and P34 = T2 / r4
+    x1 = (y[0] - m.stage1.backlash) * sc["L"] * 4e8
+    assert x1 == pytest.approx(200.0 / g1.pair.base_radius(1), rel=1e-9)
+    x3 = (y[2] - m.stage2.backlash) * sc["L"] * 4.5e8
+    assert x3 == pytest.approx(sc["T2"] / g2.pair.base_radius(2), rel=1e-9)
+
+
+def test_rejects_bad_parameters():
+    with pytest.raises(ModelError):
+        MeshStage(-0.1, 0.0)
+    with pytest.raises(ModelError):
+        nonlinear_model(coupling1=1.0, coupling2=1.2)
+    with pytest.raises(ModelError):
+        two_stage_periods(nonlinear_model(), -1.0, [0, 0, 0, 0], 1)
