@@ -370,10 +370,17 @@ def two_stage_steady_response(
     )
     assert hist is not None
     b = (model.stage1.backlash, model.stage2.backlash)
-    peak = tuple(float(np.max(np.abs(hist[:, c]))) for c in (0, 2))
-    amp = tuple(float(np.ptp(hist[:, c]) / 2) for c in (0, 2))
-    loss = tuple(bool(b[i] > 0 and np.any(np.abs(hist[:, 2 * i + 1]) <= b[i])) for i in (0, 1))
-    back = tuple(bool(np.any(hist[:, 2 * i + 1] < -b[i])) for i in (0, 1))
+    peak = (float(np.max(np.abs(hist[:, 0]))), float(np.max(np.abs(hist[:, 2]))))
+    amp = (float(np.ptp(hist[:, 0]) / 2), float(np.ptp(hist[:, 2]) / 2))
+
+    def lost(i: int) -> bool:
+        return bool(b[i] > 0 and np.any(np.abs(hist[:, 2 * i + 1]) <= b[i]))
+
+    def behind(i: int) -> bool:
+        return bool(np.any(hist[:, 2 * i + 1] < -b[i]))
+
+    loss = (lost(0), lost(1))
+    back = (behind(0), behind(1))
     return TwoStageResponse(float(frequency), peak, amp, loss, back, pts2[-1], hist)
 
 
