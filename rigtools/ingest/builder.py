@@ -53,7 +53,6 @@ class _ChannelParts:
     blocks: list[_Block] = field(default_factory=list)
     stamp_index: list[np.ndarray] = field(default_factory=list)
     stamps: list[np.ndarray] = field(default_factory=list)
-    start_time_s: float | None = None
     n_samples: int = 0
 
 
@@ -160,11 +159,6 @@ class RecordingBuilder:
         """Note that the source's counter restarted at sample ``index`` (gap kind "restart")."""
         self._restarts.setdefault(channel, set()).add(int(index))
 
-    def set_start_time(self, channel: str, start_time_s: float) -> None:
-        """Fix the time of sample index 0 (when the source states it exactly)."""
-        if channel in self._channels:
-            self._channels[channel].start_time_s = float(start_time_s)
-
     def add_slow(self, name: str, unit: str, time_s: np.ndarray, values: np.ndarray) -> None:
         """Add points of a slow signal."""
         parts = self._slow.get(name)
@@ -174,11 +168,6 @@ class RecordingBuilder:
             return
         parts.time.append(np.asarray(time_s, np.float64))
         parts.values.append(np.asarray(values, np.float64))
-
-    @property
-    def n_channels(self) -> int:
-        """Uniform channels seen so far."""
-        return len(self._channels)
 
     def build(self, metadata: RunMetadata, provenance: Provenance) -> Recording:
         """Lay every channel on its grid and return the Recording."""
@@ -315,10 +304,8 @@ class RecordingBuilder:
                 self.report.reject("non_finite_sample", n_nonfinite,
                                    f"channel {name!r} index {at}")
             del nonfinite
-        # Start time: exact when the source states it, else from the logger stamps.
-        if parts.start_time_s is not None:
-            t0 = parts.start_time_s
-        elif parts.stamps:
+        # Start time (sample index 0) from the logger stamps.
+        if parts.stamps:
             si, st = _join(parts.stamp_index), _join(parts.stamps)
             if si.size > MAX_CLOCK_POINTS:  # the clock check needs no more than this
                 pick = np.linspace(0, si.size - 1, MAX_CLOCK_POINTS).astype(np.int64)

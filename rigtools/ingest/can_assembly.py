@@ -40,7 +40,6 @@ class _UniformAcc:
     stamps: list[tuple[float, np.ndarray]] = field(default_factory=list)
     raws: list[np.ndarray] = field(default_factory=list)
     conversion: tuple[tuple[float, float], ...] = ()
-    first_position: str = ""
 
 
 def assemble_can(
@@ -109,7 +108,7 @@ def assemble_can(
                     acc = accs.get((ui, bus))
                     if acc is None:
                         acc = accs[(ui, bus)] = _UniformAcc(layout.uniform[ui])
-                    _decode_uniform(acc, data, stamps, batch.where(int(bus_rows[0])))
+                    _decode_uniform(acc, data, stamps)
                 for si in slow_by_key.get(key, ()):
                     s = layout.slow[si]
                     vals = decode_signal(data, s.signal)
@@ -149,7 +148,7 @@ def _bus_name(name: str, bus: int, buses: set[int], report: IngestReport) -> str
 
 
 def _decode_uniform(
-    acc: _UniformAcc, data: np.ndarray, stamps: np.ndarray, where: str
+    acc: _UniformAcc, data: np.ndarray, stamps: np.ndarray
 ) -> None:
     u = acc.spec
     raws, convs = zip(*(signal_raw(data, s) for s in u.samples), strict=True)
@@ -164,7 +163,6 @@ def _decode_uniform(
         conv = (*conv, (u.spec.scale, u.spec.offset))
     if not acc.raws:
         acc.conversion = conv
-        acc.first_position = where
     acc.raws.append(raw)
     base = float(stamps[0])
     acc.stamps.append((base, (stamps - base).astype(np.float32)))

@@ -24,7 +24,6 @@ __all__ = [
     "load_dbc",
     "multiplex_mask",
     "raw_signal",
-    "signal_bytes",
     "signal_raw",
 ]
 
@@ -65,15 +64,6 @@ def load_dbc(path: str | Path, *, strict: bool = True) -> Any:
 def dbc_digest(path: str | Path) -> str:
     """SHA-256 of a DBC file (recorded in provenance)."""
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-
-
-def signal_bytes(signal: Any) -> tuple[int, int]:
-    """First and last payload byte a signal occupies (inclusive)."""
-    start, length = int(signal.start), int(signal.length)
-    if signal.byte_order == "little_endian":
-        return start // 8, (start + length - 1) // 8
-    msb = (start // 8) * 8 + (7 - start % 8)
-    return msb // 8, (msb + length - 1) // 8
 
 
 def raw_signal(data: np.ndarray, start: int, length: int, byte_order: str) -> np.ndarray:

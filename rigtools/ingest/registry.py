@@ -174,9 +174,3 @@ def detect_format(path: str | Path, fmt: str | None = None) -> str:
         repr(head[:16]),
     )
 
-
-def head_of(data: bytes | io.BytesIO) -> bytes:
-    """First bytes used for sniffing (helper for tests)."""
-    if isinstance(data, io.BytesIO):
-        return data.getvalue()[:_HEAD_BYTES]
-    return data[:_HEAD_BYTES]

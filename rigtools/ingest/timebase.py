@@ -145,13 +145,20 @@ def unwrap_counter(
 def indices_from_stamps(stamps_s: np.ndarray, sample_rate_Hz: float) -> np.ndarray:
     """Sample indices of irregularly stamped samples on a nominal grid.
 
-    ``round((t - t[0]) * fs)``; used where a source carries no counter (ROS ``Imu`` header
-    stamps). Duplicates and gaps then show up as repeated or skipped indices.
+    ``round(x - phase)`` with ``x = (t - t[0]) fs`` and ``phase`` the circular mean of the
+    fractional parts of ``x``: the grid is anchored on all stamps, not on the first one alone,
+    so a jittered first stamp does not shift every index by half a period (which turns jitter
+    into fake duplicates and gaps). The smallest index is 0. Used where a source carries no
+    counter (mapped MCAP fields); duplicates and gaps then show up as repeated or skipped
+    indices.
     """
     t = np.asarray(stamps_s, np.float64)
     if t.size == 0:
         return np.zeros(0, np.int64)
-    return np.round((t - t[0]) * float(sample_rate_Hz)).astype(np.int64)
+    x = (t - t[0]) * float(sample_rate_Hz)
+    phase = np.angle(np.exp(2j * np.pi * x).mean()) / (2 * np.pi)
+    k = np.round(x - phase).astype(np.int64)
+    return k - k.min()
 
 
 def timebase_check(

@@ -110,3 +110,13 @@ def test_long_gap_with_lost_frames_uses_the_clock_to_count_wraps():
     ticks = np.r_[np.arange(1000), 1000 + 170_660 + np.arange(1000)]
     un = unwrap_counter(ticks % 65536, 65536, ticks / rate, rate)
     assert np.array_equal(un.ticks, ticks)
+
+
+def test_indices_from_stamps_do_not_hinge_on_a_jittered_first_stamp():
+    # A first stamp 0.45 period late: anchoring on it would put every other stamp with
+    # jitter below -0.05 period into the slot before its own (fake duplicates and gaps).
+    rng = np.random.default_rng(2)
+    t = np.arange(2000) / 1000.0 + rng.uniform(-0.3e-3, 0.3e-3, 2000)
+    t[0] = 0.45e-3
+    idx = indices_from_stamps(t, 1000.0)
+    assert np.array_equal(idx, np.arange(2000))
