@@ -16,6 +16,7 @@ import struct
 import zlib
 from pathlib import Path
 
+import mcap_layout
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -53,30 +54,6 @@ def _rec(op: int, content: bytes) -> bytes:
     return _HDR.pack(op, len(content)) + content
 
 
-def _records(data: bytes) -> list[tuple[int, int, int]]:
-    """(opcode, offset, content length) of every top-level record up to the Footer."""
-    out, pos = [], 8
-    while pos + 9 <= len(data):
-        op, length = _HDR.unpack_from(data, pos)
-        out.append((op, pos, length))
-        pos += 9 + length
-        if op == 0x02:
-            break
-    return out
-
-
-def _chunks(data: bytes) -> list[dict[str, int | str]]:
-    out = []
-    for op, pos, length in _records(data):
-        if op != 0x06:
-            continue
-        c = pos + 9
-        clen = struct.unpack_from("<I", data, c + 28)[0]
-        rlen_at = c + 32 + clen
-        out.append({"pos": pos, "end": pos + 9 + length, "usize_at": c + 16, "crc_at": c + 24,
-                    "clen_at": c + 28, "comp_at": c + 32, "records_at": rlen_at + 8,
-                    "records_len": struct.unpack_from("<Q", data, rlen_at)[0]})
-    return out
 
 
 def _chans(n=20_000, n_ch=3, seed=0):
@@ -134,7 +111,7 @@ def intact(request, tmp_path_factory) -> Path:
 
 def _damage(data: bytes, kind: str) -> bytes:
     out = bytearray(data)
-    cs = _chunks(data)
+    cs = mcap_layout.chunks(data)
     c = cs[2]
     if kind == "flip_in_records":
         out[c["records_at"] + c["records_len"] // 2] ^= 0x01

@@ -14,6 +14,7 @@ import tracemalloc
 import zlib
 from pathlib import Path
 
+import mcap_layout
 import numpy as np
 import pytest
 
@@ -32,32 +33,6 @@ _HDR = struct.Struct("<BQ")
 # --- an independent walker over the file, for locating what to damage ------------------------
 
 
-def _records(data: bytes) -> list[tuple[int, int, int]]:
-    """(opcode, offset, content length) of every top-level record up to and including Footer."""
-    out, pos = [], 8
-    while pos + 9 <= len(data):
-        op, length = _HDR.unpack_from(data, pos)
-        out.append((op, pos, length))
-        pos += 9 + length
-        if op == 0x02:
-            break
-    return out
-
-
-def _chunks(data: bytes) -> list[dict[str, int | str]]:
-    """Offsets of the fields of every Chunk record."""
-    out = []
-    for op, pos, length in _records(data):
-        if op != 0x06:
-            continue
-        c = pos + 9
-        clen = struct.unpack_from("<I", data, c + 28)[0]
-        rlen_at = c + 32 + clen
-        rlen = struct.unpack_from("<Q", data, rlen_at)[0]
-        out.append({"pos": pos, "end": pos + 9 + length, "usize_at": c + 16, "crc_at": c + 24,
-                    "compression": data[c + 32 : c + 32 + clen].decode(), "comp_at": c + 32,
-                    "records_at": rlen_at + 8, "records_len": rlen})
-    return out
 
 
 def _messages_in_chunk(data: bytes, chunk: dict) -> int:
@@ -169,9 +144,9 @@ def test_magic_only_is_cut_before_any_record(tmp_path):
 def test_truncated_at_several_points_returns_exactly_the_complete_prefix(intact, tmp_path):
     data = intact.read_bytes()
     ref = read(intact)
-    chunks = _chunks(data)
+    chunks = mcap_layout.chunks(data)
     assert len(chunks) >= 8
-    recs = _records(data)
+    recs = mcap_layout.records(data)
     data_end = next(pos for op, pos, _l in recs if op == 0x0F)
     cuts = {
         "inside chunk 3 header": chunks[3]["pos"] + 4,
@@ -199,7 +174,7 @@ def test_truncated_at_several_points_returns_exactly_the_complete_prefix(intact,
 
 def test_cut_inside_the_first_chunk_leaves_no_data_but_counts_the_loss(intact, tmp_path):
     data = intact.read_bytes()
-    c0 = _chunks(data)[0]
+    c0 = mcap_layout.chunks(data)[0]
     with pytest.raises(NoDataError, match="truncated_record: 1"):
         read(_write(tmp_path, data[: c0["pos"] + 100]))
 
@@ -207,7 +182,7 @@ def test_cut_inside_the_first_chunk_leaves_no_data_but_counts_the_loss(intact, t
 def test_cut_in_the_summary_loses_nothing(intact, tmp_path):
     data = intact.read_bytes()
     ref = read(intact)
-    recs = _records(data)
+    recs = mcap_layout.records(data)
     data_end = next((pos, length) for op, pos, length in recs if op == 0x0F)
     for cut in (data_end[0] + 9 + data_end[1], data_end[0] + 9 + data_end[1] + 4,
                 len(data) - 20, len(data) - 3):
@@ -221,7 +196,7 @@ def test_unchunked_file_cut_inside_a_message(tmp_path):
     p = write_accel_mcap(tmp_path / "flat.mcap", _chans(n=3000), batch=256, use_chunking=False)
     data = p.read_bytes()
     ref = read(p)
-    msgs = [(pos, length) for op, pos, length in _records(data) if op == 0x05]
+    msgs = [(pos, length) for op, pos, length in mcap_layout.records(data) if op == 0x05]
     cut = msgs[10][0] + 9 + 100
     rec = read(_write(tmp_path, data[:cut]))
     assert rec.report.decoded == 10
@@ -238,7 +213,7 @@ def test_file_without_summary_or_indexes_reads_by_streaming(tmp_path, use_chunki
     ref = read(write_accel_mcap(tmp_path / "ref.mcap", chans, batch=256, chunk_size=8192))
     p = write_accel_mcap(tmp_path / "bare.mcap", chans, batch=256, chunk_size=8192,
                          use_chunking=use_chunking, indexed=False)
-    ops = {op for op, _p, _l in _records(p.read_bytes())}
+    ops = {op for op, _p, _l in mcap_layout.records(p.read_bytes())}
     assert not ops & {0x07, 0x08, 0x0B, 0x0E}  # no message/chunk index, statistics, offsets
     rec = read(p)
     assert all(rec.channels[k].equals(ref.channels[k]) for k in ref.channels)
@@ -248,7 +223,7 @@ def test_file_without_summary_or_indexes_reads_by_streaming(tmp_path, use_chunki
 def test_mcap_library_needs_the_summary_we_do_not(tmp_path):
     p = write_accel_mcap(tmp_path / "bare.mcap", _chans(n=2000), batch=256, indexed=False)
     data = p.read_bytes()
-    data_end = next(pos for op, pos, _l in _records(data) if op == 0x0F)
+    data_end = next(pos for op, pos, _l in mcap_layout.records(data) if op == 0x0F)
     stripped = _write(tmp_path, data[: data_end + 9 + 4])  # DataEnd kept, footer gone
     rec = read(stripped)
     assert sum(len(c) for c in rec.channels.values()) == 4000
@@ -263,7 +238,7 @@ def test_mcap_library_needs_the_summary_we_do_not(tmp_path):
 def test_flipped_byte_in_uncompressed_chunk_fails_its_crc(intact_plain, tmp_path):
     data = bytearray(intact_plain.read_bytes())
     ref = read(intact_plain)
-    c = _chunks(bytes(data))[2]
+    c = mcap_layout.chunks(bytes(data))[2]
     n_msgs = _messages_in_chunk(bytes(data), c)
     # a byte deep inside the samples of the chunk's second record (not a length field)
     second = c["records_at"] + 9 + struct.unpack_from("<Q", data, c["records_at"] + 1)[0]
@@ -286,7 +261,7 @@ def test_flipped_byte_in_uncompressed_chunk_fails_its_crc(intact_plain, tmp_path
 def test_flipped_byte_in_zstd_chunk_is_refused_and_counted(intact, tmp_path):
     data = bytearray(intact.read_bytes())
     ref = read(intact)
-    c = _chunks(bytes(data))[4]
+    c = mcap_layout.chunks(bytes(data))[4]
     assert c["compression"] == "zstd"
     n_msgs = _messages_in_chunk(bytes(data), c)
     data[c["records_at"] + c["records_len"] // 2] ^= 0x01
@@ -300,7 +275,7 @@ def test_refused_chunk_without_message_indexes_counts_as_one(tmp_path):
     p = write_accel_mcap(tmp_path / "bare.mcap", _chans(n=4000), batch=256, chunk_size=8192,
                          compression="none", indexed=False)
     data = bytearray(p.read_bytes())
-    c = _chunks(bytes(data))[1]
+    c = mcap_layout.chunks(bytes(data))[1]
     data[c["records_at"] + 300] ^= 0xFF
     rec = read(_write(tmp_path, bytes(data)))
     assert rec.report.rejected["chunk_crc_mismatch"] == 1
@@ -308,7 +283,7 @@ def test_refused_chunk_without_message_indexes_counts_as_one(tmp_path):
 
 def test_zero_crc_means_unchecked_and_a_bad_record_inside_is_counted(intact_plain, tmp_path):
     data = bytearray(intact_plain.read_bytes())
-    c = _chunks(bytes(data))[1]
+    c = mcap_layout.chunks(bytes(data))[1]
     struct.pack_into("<I", data, c["crc_at"], 0)
     rec = read(_write(tmp_path, bytes(data)))  # crc 0: not checked, still intact
     assert not rec.report.rejected
@@ -338,7 +313,7 @@ def _peak_bytes(fn) -> int:
 def test_absurd_uncompressed_size_is_refused_before_allocating(intact, tmp_path, claim):
     data = bytearray(intact.read_bytes())
     ref = read(intact)
-    c = _chunks(bytes(data))[3]
+    c = mcap_layout.chunks(bytes(data))[3]
     n_msgs = _messages_in_chunk(bytes(data), c)
     struct.pack_into("<Q", data, c["usize_at"], claim)
     p = _write(tmp_path, bytes(data))
@@ -380,7 +355,7 @@ def test_zstd_frame_claiming_a_huge_content_size_is_bounded_by_the_chunk(tmp_pat
 def test_record_length_past_end_of_file(intact, tmp_path):
     data = bytearray(intact.read_bytes())
     ref = read(intact)
-    c = _chunks(bytes(data))[6]
+    c = mcap_layout.chunks(bytes(data))[6]
     struct.pack_into("<Q", data, c["pos"] + 1, len(data))
     rec = read(_write(tmp_path, bytes(data)))
     assert rec.report.rejected["truncated_record"] == 1
@@ -392,7 +367,7 @@ def test_record_length_past_end_of_file(intact, tmp_path):
 
 def test_record_length_of_2_63_in_a_gzip_stream_allocates_nothing(intact, tmp_path):
     data = bytearray(intact.read_bytes())
-    c = _chunks(bytes(data))[2]
+    c = mcap_layout.chunks(bytes(data))[2]
     struct.pack_into("<Q", data, c["pos"] + 1, 2**63)
     gz = tmp_path / "huge.mcap.gz"
     gz.write_bytes(gzip.compress(bytes(data)))
@@ -406,7 +381,7 @@ def test_record_length_of_2_63_in_a_gzip_stream_allocates_nothing(intact, tmp_pa
 
 def test_unknown_compression_is_counted(intact, tmp_path):
     data = bytearray(intact.read_bytes())
-    c = _chunks(bytes(data))[1]
+    c = mcap_layout.chunks(bytes(data))[1]
     n_msgs = _messages_in_chunk(bytes(data), c)
     data[c["comp_at"] : c["comp_at"] + 4] = b"brot"
     rec = read(_write(tmp_path, bytes(data)))
@@ -417,7 +392,8 @@ def test_unknown_compression_is_counted(intact, tmp_path):
 def test_channels_defined_only_in_a_refused_chunk_come_back_from_the_summary(intact, tmp_path):
     data = bytearray(intact.read_bytes())
     ref = read(intact)
-    c = _chunks(bytes(data))[0]  # the writer puts Schema and Channel records in the first chunk
+    # the writer puts Schema and Channel records in the first chunk
+    c = mcap_layout.chunks(bytes(data))[0]
     n_msgs = _messages_in_chunk(bytes(data), c)
     data[c["records_at"] + 40] ^= 0x10
     rec = read(_write(tmp_path, bytes(data)))
@@ -430,7 +406,7 @@ def test_channels_defined_only_in_a_refused_chunk_come_back_from_the_summary(int
     bare = write_accel_mcap(tmp_path / "bare.mcap", _chans(), batch=256, chunk_size=4096,
                             indexed=False)
     data = bytearray(bare.read_bytes())
-    c = _chunks(bytes(data))[0]
+    c = mcap_layout.chunks(bytes(data))[0]
     data[c["records_at"] + 40] ^= 0x10
     with pytest.raises(NoDataError, match=r"unknown_channel: \d+"):
         read(_write(tmp_path, bytes(data), "bare_damaged.mcap"))
@@ -442,7 +418,7 @@ def test_channels_defined_only_in_a_refused_chunk_come_back_from_the_summary(int
 def test_unknown_opcodes_are_skipped_by_length(intact, tmp_path):
     data = intact.read_bytes()
     ref = read(intact)
-    c = _chunks(data)[2]
+    c = mcap_layout.chunks(data)[2]
     junk = _HDR.pack(0x42, 5) + b"hello" + _HDR.pack(0xF0, 0) + _HDR.pack(0x10, 3) + b"\x00" * 3
     rec = read(_write(tmp_path, data[: c["pos"]] + junk + data[c["pos"] :]))
     assert all(rec.channels[k].equals(ref.channels[k]) for k in ref.channels)
@@ -452,7 +428,7 @@ def test_unknown_opcodes_are_skipped_by_length(intact, tmp_path):
 def test_message_naming_an_undefined_channel_is_counted(tmp_path):
     p = write_accel_mcap(tmp_path / "flat.mcap", _chans(n=1000), batch=256, use_chunking=False)
     data = bytearray(p.read_bytes())
-    msgs = [pos for op, pos, _l in _records(bytes(data)) if op == 0x05]
+    msgs = [pos for op, pos, _l in mcap_layout.records(bytes(data)) if op == 0x05]
     struct.pack_into("<H", data, msgs[3] + 9, 999)
     rec = read(_write(tmp_path, bytes(data)))
     assert rec.report.rejected["unknown_channel"] == 1
@@ -499,6 +475,6 @@ def test_every_single_byte_cut_of_a_small_file_reads_without_exceptions(tmp_path
 
 def test_crc_helper_agrees_with_the_writer(intact_plain):
     data = intact_plain.read_bytes()
-    c = _chunks(data)[0]
+    c = mcap_layout.chunks(data)[0]
     raw = data[c["records_at"] : c["records_at"] + c["records_len"]]
     assert zlib.crc32(raw) == struct.unpack_from("<I", data, c["crc_at"])[0]
