@@ -31,6 +31,7 @@ def chunks(data: bytes) -> list[dict[str, int | str]]:
         rlen_at = c + 32 + clen
         rlen = struct.unpack_from("<Q", data, rlen_at)[0]
         out.append({"pos": pos, "end": pos + 9 + length, "usize_at": c + 16, "crc_at": c + 24,
-                    "clen_at": c + 28, "compression": data[c + 32 : c + 32 + clen].decode(), "comp_at": c + 32,
+                    "clen_at": c + 28, "compression": data[c + 32 : c + 32 + clen].decode(),
+                    "comp_at": c + 32,
                     "records_at": rlen_at + 8, "records_len": rlen})
     return out
