@@ -169,6 +169,11 @@ class RecordingBuilder:
         parts.time.append(np.asarray(time_s, np.float64))
         parts.values.append(np.asarray(values, np.float64))
 
+    @property
+    def n_channels(self) -> int:
+        """Uniform channels seen so far."""
+        return len(self._channels)
+
     def build(self, metadata: RunMetadata, provenance: Provenance) -> Recording:
         """Lay every channel on its grid and return the Recording."""
         channels = {}
