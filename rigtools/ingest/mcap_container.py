@@ -8,18 +8,14 @@ output and checked against their CRC (:mod:`rigtools.ingest.mcap_decompress`). N
 depends on the summary section, so files without a summary or indexes, and files cut short,
 are read as far as they are intact.
 
-:class:`ContainerScanner` hands on messages a :class:`MessageBlock` at a time (one block per
-chunk, with the chunk's uncompressed data as a common buffer and the message header fields as
-columns), which lets payload decoders work on a whole chunk at once. :func:`iter_messages` is
+:class:`ContainerScanner` hands on messages a :class:`MessageBlock` at a time (one per
+chunk), which lets payload decoders work on a whole chunk at once. :func:`iter_messages` is
 the same walk one :class:`RawMessage` at a time.
 
 Two things make the walk fast without changing what it finds:
 
-* Inside a chunk, a run of Message records of one length is read with array operations: the
-  walk guesses that the next records lie at equal strides, reads opcode and length at each
-  guessed offset, and takes the run up to the first record that is not a Message of that
-  length (each record's own length vouches for where the next one starts, so the guess is
-  checked record by record). Anything else is walked one record at a time.
+* Inside a chunk, a run of Message records of one length is read with array operations
+  (:mod:`rigtools.ingest.mcap_walk`, which also holds :class:`MessageBlock`).
 * When the stream can be read at a position without moving (a regular file, a ``BytesIO``),
   the next chunk is read, decompressed and CRC-checked in a worker thread while the records of
   the current one are parsed (decompression and CRC release the GIL; when the worker is the
@@ -38,12 +34,9 @@ end of the file if the summary's repeated Channel records define it.
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any, BinaryIO, Final, NamedTuple, TypeAlias, TypeVar
-
-import numpy as np
 
 from rigtools.errors import RecordingFormatError
 from rigtools.ingest.mcap_decompress import (
@@ -80,6 +73,7 @@ from rigtools.ingest.mcap_records import (
     statistics_message_count,
 )
 from rigtools.ingest.mcap_source import ByteSource
+from rigtools.ingest.mcap_walk import ChunkRecordWalk, MessageBlock, ScannedMessage
 from rigtools.ingest.recording import IngestReport
 
 __all__ = [
@@ -107,111 +101,8 @@ PIPELINE_MIN_CHUNK_BYTES = 64 << 10
 _MAX_WARNINGS_PER_REASON: Final = 5
 #: A run of equal Message records is read with array operations when it has at least this many.
 _RUN_MIN: Final = 8
-#: The first guess checks this many records; each further one eight times more.
-_RUN_PROBE: Final = 16
-#: After a guess that did not pay, this many records are walked one by one before the next.
-_RUN_BACKOFF: Final = 8
 #: How many top-level records the look-ahead for the next chunk steps over at most.
 _LOOKAHEAD_RECORDS: Final = 64
-
-#: A message as :meth:`MessageBlock.messages` hands it on: (channel_id, sequence, log_time
-#: (ns), publish_time (ns), payload, offset of the payload in its block's buffer, or -1 when
-#: the block has no common buffer).
-ScannedMessage: TypeAlias = tuple[int, int, int, int, memoryview, int]
-
-
-class MessageBlock:
-    """Messages found together (one chunk, or a stretch of the data section), as columns.
-
-    Attributes
-    ----------
-    where : str
-        Where the block was found, for tallies (``"byte 1234"``).
-    buf : memoryview or None
-        The common buffer of a chunk block (its uncompressed records); None otherwise.
-    channel_id, sequence : numpy.ndarray
-        int64, one per message, in file order.
-    log_time, publish_time : numpy.ndarray
-        uint64 (ns).
-    start, end : numpy.ndarray or None
-        int64 byte range of each payload in ``buf`` (None when ``buf`` is None).
-    """
-
-    __slots__ = ("_payloads", "buf", "channel_id", "end", "log_time", "publish_time",
-                 "sequence", "start", "where")
-
-    def __init__(self, where: str, buf: Any, channel_id: np.ndarray, sequence: np.ndarray,
-                 log_time: np.ndarray, publish_time: np.ndarray, start: np.ndarray | None,
-                 end: np.ndarray | None, payloads: list[Any] | None = None) -> None:
-        self.where = where
-        self.buf = buf
-        self.channel_id = channel_id
-        self.sequence = sequence
-        self.log_time = log_time
-        self.publish_time = publish_time
-        self.start = start
-        self.end = end
-        self._payloads = payloads
-
-    @classmethod
-    def from_messages(cls, where: str, msgs: list[ScannedMessage]) -> MessageBlock:
-        """A block without a common buffer, from message tuples (payloads kept as given)."""
-        return cls(where, None,
-                   np.fromiter((m[0] for m in msgs), np.int64, len(msgs)),
-                   np.fromiter((m[1] for m in msgs), np.int64, len(msgs)),
-                   np.fromiter((m[2] for m in msgs), np.uint64, len(msgs)),
-                   np.fromiter((m[3] for m in msgs), np.uint64, len(msgs)),
-                   None, None, [m[4] for m in msgs])
-
-    def __len__(self) -> int:
-        return int(self.channel_id.shape[0])
-
-    def messages(self) -> list[ScannedMessage]:
-        """The messages as tuples, in file order (payloads are views into ``buf``)."""
-        cols = (self.channel_id.tolist(), self.sequence.tolist(), self.log_time.tolist(),
-                self.publish_time.tolist())
-        if self.buf is None or self.start is None or self.end is None:
-            payloads = self._payloads or []
-            return [(c, s, lt, pt, p, -1) for c, s, lt, pt, p in zip(*cols, payloads,
-                                                                       strict=True)]
-        buf = self.buf
-        return [(c, s, lt, pt, buf[a:b], a) for c, s, lt, pt, a, b in
-                zip(*cols, self.start.tolist(), self.end.tolist(), strict=True)]
-
-    def take(self, idx: np.ndarray | slice) -> MessageBlock:
-        """The messages at positions ``idx`` (ascending, or a slice): a block of the same buffer."""
-        if self._payloads is None:
-            payloads = None
-        elif isinstance(idx, slice):
-            payloads = self._payloads[idx]
-        else:
-            payloads = [self._payloads[i] for i in idx.tolist()]
-        return MessageBlock(self.where, self.buf, self.channel_id[idx], self.sequence[idx],
-                            self.log_time[idx], self.publish_time[idx],
-                            None if self.start is None else self.start[idx],
-                            None if self.end is None else self.end[idx], payloads)
-
-    def by_channel(self) -> list[tuple[int, MessageBlock]]:
-        """The block split by channel id, channels in order of first appearance."""
-        cids = self.channel_id
-        n = cids.shape[0]
-        order = list(dict.fromkeys(cids.tolist()))
-        p = len(order)
-        if p <= 1:
-            return [(order[0], self)] if order else []
-        if (cids[p:] == cids[: n - p]).all():
-            # channels taking turns (one logger's interleaved channels): strided views
-            return [(c, self.take(slice(j, None, p))) for j, c in enumerate(order)]
-        return [(c, self.take(np.flatnonzero(cids == c))) for c in order]
-
-
-@functools.lru_cache(maxsize=64)
-def _run_dtype(stride: int) -> np.dtype:
-    """Record header and message header fields of Message records ``stride`` bytes apart."""
-    return np.dtype({"names": ["op", "len", "cid", "seq", "lt", "pt"],
-                     "formats": ["u1", "<u8", "<u2", "<u4", "<u8", "<u8"],
-                     "offsets": [0, 1, 9, 11, 15, 23], "itemsize": stride})
-
 
 #: The outcome of a chunk record's content: its uncompressed records (None when it has none
 #: or is refused), the refusal (reason, detail) if any, and the CRC still to check (None when
@@ -247,13 +138,6 @@ def _chunk_outcome(content: Any, decompressor: ChunkDecompressor, validate_crcs:
     return data, None, crc
 
 
-def _columns(one: tuple[list[int], ...]) -> tuple[np.ndarray, ...]:
-    """Message columns from lists (cid, seq, log time, publish time, payload start, end)."""
-    cid, seq, lt, pt, a, b = one
-    return (np.array(cid, np.int64), np.array(seq, np.int64), np.array(lt, np.uint64),
-            np.array(pt, np.uint64), np.array(a, np.int64), np.array(b, np.int64))
-
-
 _Record = TypeVar("_Record", SchemaRecord, ChannelRecord)
 
 
@@ -285,7 +169,7 @@ class RawMessage(NamedTuple):
     data: bytes
 
 
-class ContainerScanner:
+class ContainerScanner(ChunkRecordWalk):
     """Stream an MCAP file's records from the start; yield messages chunk by chunk.
 
     Parameters
@@ -416,127 +300,7 @@ class ContainerScanner:
         if data is None:
             return None
         buf = memoryview(data)
-        return self._chunk_records(buf, pos)
-
-    def _chunk_records(self, buf: memoryview, cpos: int) -> MessageBlock | None:
-        """The messages of a chunk's uncompressed records, as one block (None when none)."""
-        channels = self.channels
-        unpack_hdr, unpack_msg = RECORD_HEADER.unpack_from, MESSAGE_HEADER.unpack_from
-        hsize, msize = RECORD_HEADER_BYTES, MESSAGE_HEADER_BYTES
-        n = len(buf)
-        pos = 0
-        n_msg = 0
-        cols: list[tuple[np.ndarray, ...]] = []
-        # messages found one by one, since the last run: cid, seq, lt, pt, payload start, end
-        one: tuple[list[int], ...] = ([], [], [], [], [], [])
-        quiet = 0
-        while pos < n:
-            if n - pos < hsize:
-                self._bad_in_chunk(cpos, pos, f"{n - pos} stray bytes at the end")
-                break
-            op, length = unpack_hdr(buf, pos)
-            body = pos + hsize
-            if length > n - body:
-                self._bad_in_chunk(cpos, pos, f"record of {length} bytes, {n - body} left")
-                break
-            stop = body + length
-            if op == OP_MESSAGE:
-                if quiet:
-                    quiet -= 1
-                elif length >= msize and n - stop >= (_RUN_MIN - 1) * (stop - pos):
-                    k = self._run_length(buf, pos, stop - pos, length)
-                    if k >= _RUN_MIN:
-                        if one[0]:
-                            cols.append(_columns(one))
-                            one = ([], [], [], [], [], [])
-                        self._take_run(buf, cpos, pos, stop - pos, k, cols)
-                        n_msg += k
-                        pos += k * (stop - pos)
-                        continue
-                    quiet = _RUN_BACKOFF
-                n_msg += 1
-                if length < msize:
-                    self.report.reject("bad_record", 1, f"chunk at byte {cpos} +{pos}")
-                else:
-                    cid, seq, lt, pt = unpack_msg(buf, body)
-                    if cid in channels:
-                        one[0].append(cid)
-                        one[1].append(seq)
-                        one[2].append(lt)
-                        one[3].append(pt)
-                        one[4].append(body + msize)
-                        one[5].append(stop)
-                    else:
-                        self._defer(cid, seq, lt, pt, buf[body + msize : stop],
-                                    f"chunk at byte {cpos} +{pos}")
-            elif op == OP_SCHEMA:
-                self._schema(buf, body, stop, f"chunk at byte {cpos} +{pos}")
-            elif op == OP_CHANNEL:
-                self._channel(buf, body, stop, f"chunk at byte {cpos} +{pos}")
-            pos = stop
-        self.n_message_records += n_msg
-        if one[0]:
-            cols.append(_columns(one))
-        if not cols:
-            return None
-        if len(cols) == 1:
-            c = cols[0]
-        else:
-            c = tuple(np.concatenate(parts) for parts in zip(*cols, strict=True))
-        cid, seq, lt, pt, start, end = c
-        return MessageBlock(f"byte {cpos}", buf, cid, seq, lt, pt, start, end)
-
-    @staticmethod
-    def _run_length(buf: memoryview, pos: int, stride: int, length: int) -> int:
-        """How many Message records of content ``length`` follow each other from ``pos``.
-
-        The record at ``pos`` is one. Records are checked in windows growing eightfold, so a
-        wrong guess costs a few records' worth of work.
-        """
-        count = (len(buf) - pos) // stride
-        dt = _run_dtype(stride)
-        k, w = 0, _RUN_PROBE
-        while k < count:
-            m = min(w, count - k)
-            recs = np.frombuffer(buf, dt, m, pos + k * stride)
-            ok = (recs["op"] == OP_MESSAGE) & (recs["len"] == length)
-            if not ok.all():
-                return k + int(ok.argmin())
-            k += m
-            w *= 8
-        return k
-
-    def _take_run(self, buf: memoryview, cpos: int, pos: int, stride: int, k: int,
-                  cols: list[tuple[np.ndarray, ...]]) -> None:
-        """Columns of ``k`` Message records ``stride`` bytes apart from ``pos`` (checked)."""
-        recs = np.frombuffer(buf, _run_dtype(stride), k, pos)
-        cid = recs["cid"].astype(np.int64)
-        seq = recs["seq"].astype(np.int64)
-        lt = recs["lt"].astype(np.uint64)
-        pt = recs["pt"].astype(np.uint64)
-        start = np.arange(k, dtype=np.int64)
-        start *= stride
-        start += pos + RECORD_HEADER_BYTES + MESSAGE_HEADER_BYTES
-        end = start + (stride - RECORD_HEADER_BYTES - MESSAGE_HEADER_BYTES)
-        unknown = [c for c in np.unique(cid).tolist() if c not in self.channels]
-        if unknown:
-            later = np.isin(cid, unknown)
-            for i in np.flatnonzero(later).tolist():
-                self._defer(int(cid[i]), int(seq[i]), int(lt[i]), int(pt[i]),
-                            buf[int(start[i]) : int(end[i])],
-                            f"chunk at byte {cpos} +{pos + i * stride}")
-            keep = ~later
-            cid, seq, lt, pt, start, end = (cid[keep], seq[keep], lt[keep], pt[keep],
-                                            start[keep], end[keep])
-            if not cid.shape[0]:
-                return
-        cols.append((cid, seq, lt, pt, start, end))
-
-    def _bad_in_chunk(self, cpos: int, pos: int, detail: str) -> None:
-        where = f"chunk at byte {cpos} +{pos}"
-        self.report.reject("bad_chunk_record", 1, where)
-        self._warn("bad_chunk_record", f"{self.path}: {where}: {detail}; the rest of the chunk "
-                   "is not used")
+        return self._chunk_records(buf, pos, _RUN_MIN)
 
     # -- messages whose channel is not defined yet ---------------------------------------
 
