@@ -1,0 +1,454 @@
+"""Order spectra on the angle grid, mesh harmonic amplitudes and the shared block machinery.
+
+See :mod:`rigtools.analysis.orders` for the method and references.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+from scipy import signal as sps
+
+from rigtools.analysis.resample import (
+    RESAMPLER_PASSBAND,
+    AngleSignal,
+    _check_int,
+    resample_to_angle,
+)
+from rigtools.analysis.speed import (
+    SpeedProfile,
+    _as_1d,
+    _check_positive,
+)
+
+__all__ = [
+    "Campbell",
+    "OrderSpectrum",
+    "acceleration_to_displacement",
+    "harmonic_amplitudes",
+    "order_spectrum",
+]
+
+
+Quantity = Literal["acceleration", "displacement"]
+
+
+# --- results ----------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class OrderSpectrum:
+    """An amplitude spectrum over shaft orders.
+
+    Attributes
+    ----------
+    order : numpy.ndarray
+        Orders (cycles per revolution), spacing ``1 / revolutions``.
+    amplitude : numpy.ndarray
+        Amplitude (unit of the input, or m for displacement), power-averaged over blocks;
+        a pure order of amplitude ``A`` on its bin reads ``A``.
+    revolutions : int
+        Revolutions per block.
+    n_blocks : int
+        Blocks averaged.
+    speed_rpm : float
+        Mean speed over the blocks, revolutions over time (rpm).
+    enbw_bins : float
+        Equivalent noise bandwidth of the window (bins).
+    max_valid_order : float
+        Orders above this lie outside the resampler's passband (at the blocks' top speed).
+    window : str
+        Window name.
+    quantity : str
+        ``"acceleration"`` (or the input's own quantity) or ``"displacement"``.
+    """
+
+    order: np.ndarray
+    amplitude: np.ndarray
+    revolutions: int
+    n_blocks: int
+    speed_rpm: float
+    enbw_bins: float
+    max_valid_order: float
+    window: str
+    quantity: str = "acceleration"
+
+    def to_displacement(self, *, highpass_Hz: float = 10.0,
+                        highpass_order: int = 4) -> OrderSpectrum:
+        """The spectrum converted from acceleration (m/s^2) to displacement (m).
+
+        Uses the mean speed for every block (see :func:`acceleration_to_displacement`).
+        """
+        if self.quantity != "acceleration":
+            raise ValueError(f"only an acceleration spectrum converts, this is {self.quantity}")
+        f = self.order * self.speed_rpm / 60.0
+        amp = np.abs(acceleration_to_displacement(self.amplitude, f, highpass_Hz=highpass_Hz,
+                                                  highpass_order=highpass_order))
+        return OrderSpectrum(self.order, amp, self.revolutions, self.n_blocks, self.speed_rpm,
+                             self.enbw_bins, self.max_valid_order, self.window, "displacement")
+
+
+@dataclass(frozen=True, eq=False)
+class Campbell:
+    """Spectra along a run: a 2-D array with its axes (waterfall or Campbell diagram data).
+
+    Attributes
+    ----------
+    time_s : numpy.ndarray
+        Centre time of each spectrum (s), shape ``(rows,)``.
+    speed_rpm : numpy.ndarray
+        Mean shaft speed of each spectrum (rpm), ``(rows,)``; NaN where unknown.
+    axis : numpy.ndarray
+        Orders or frequencies (Hz) of the columns, ``(cols,)``.
+    axis_name : str
+        ``"order"`` or ``"frequency_Hz"``. On an order axis a shaft order is a vertical line;
+        on a frequency axis order ``k`` lies on ``f = k n / 60``.
+    amplitude : numpy.ndarray
+        Amplitude spectra, ``(rows, cols)``; NaN beyond the valid band of a row.
+    quantity : str
+        ``"acceleration"`` or ``"displacement"``.
+    dropped : Mapping
+        Spectra not computed, by reason (``"gap"``, ``"speed_unknown"``).
+    """
+
+    time_s: np.ndarray
+    speed_rpm: np.ndarray
+    axis: np.ndarray
+    axis_name: str
+    amplitude: np.ndarray
+    quantity: str = "acceleration"
+    dropped: Mapping[str, int] = field(default_factory=dict)
+
+
+def _check_harmonics(harmonics: int | Sequence[int]) -> tuple[int, ...]:
+    if isinstance(harmonics, (int, np.integer)):
+        n = _check_int("harmonics", harmonics)
+        return tuple(range(1, n + 1))
+    hs = tuple(int(h) for h in harmonics)
+    if not hs or any(h < 1 or isinstance(h, bool) for h in harmonics):
+        raise ValueError(f"`harmonics` must be a count or a sequence of integers >= 1, "
+                         f"was {harmonics!r}")
+    return hs
+
+
+def _check_quantity(quantity: str) -> str:
+    if quantity not in ("acceleration", "displacement"):
+        raise ValueError(f"`quantity` must be 'acceleration' or 'displacement', was {quantity!r}")
+    return quantity
+
+
+def _auto_samples_per_rev(max_order: float) -> int:
+    need = max_order / RESAMPLER_PASSBAND
+    return int(2 ** max(4, int(np.ceil(np.log2(need)))))
+
+
+def _check_samples_per_rev(samples_per_rev: int | None, max_order: float) -> int:
+    if samples_per_rev is None:
+        return _auto_samples_per_rev(max_order)
+    p = _check_int("samples_per_rev", samples_per_rev, 4)
+    if max_order > RESAMPLER_PASSBAND * p:
+        raise ValueError(
+            f"`samples_per_rev` must be >= {int(np.ceil(max_order / RESAMPLER_PASSBAND))} to "
+            f"resolve order {max_order:g} inside the resampler's passband "
+            f"({RESAMPLER_PASSBAND} x samples_per_rev), was {p}")
+    return p
+
+
+def _window(window: str, n: int) -> np.ndarray:
+    try:
+        return np.asarray(sps.get_window(window, n, fftbins=True), dtype=np.float64)
+    except (ValueError, TypeError) as exc:
+        raise ValueError(f"`window` must be a scipy.signal window name, was {window!r}: "
+                         f"{exc}") from exc
+
+
+# --- displacement -----------------------------------------------------------------------------
+def acceleration_to_displacement(
+    amplitude: np.ndarray | float,
+    frequency_Hz: np.ndarray | float,
+    *,
+    highpass_Hz: float = 10.0,
+    highpass_order: int = 4,
+) -> np.ndarray:
+    r"""Acceleration spectrum values to displacement, with a high pass that keeps it finite.
+
+    Parameters
+    ----------
+    amplitude : array_like
+        Acceleration amplitudes or complex spectrum values (m/s^2).
+    frequency_Hz : array_like
+        Frequency of each value (Hz), broadcastable against ``amplitude``.
+    highpass_Hz : float
+        Corner ``f_c`` of the Butterworth high pass (Hz).
+    highpass_order : int
+        Its order ``N`` (>= 2, so that the result stays finite as ``f -> 0``).
+
+    Returns
+    -------
+    numpy.ndarray
+        Displacement (m): :math:`-a/(2\pi f)^2 \cdot (f/f_c)^N/\sqrt{1 + (f/f_c)^{2N}}`, zero at
+        ``f = 0``. For magnitudes take ``abs``: the minus sign is a phase of pi.
+
+    Examples
+    --------
+    A 4 m/s^2 sine at 400 Hz (far above the high pass) is ``4 / (2 pi 400)^2`` m:
+
+    >>> d = acceleration_to_displacement(4.0, 400.0)
+    >>> bool(abs(abs(d) - 4.0 / (2 * np.pi * 400.0) ** 2) < 1e-15)
+    True
+    """
+    fc = _check_positive("highpass_Hz", highpass_Hz)
+    n = _check_int("highpass_order", highpass_order, 2)
+    a = np.asarray(amplitude)
+    f = np.abs(np.asarray(frequency_Hz, dtype=np.float64))
+    r = f / fc
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        # (f/fc)^N / sqrt(1 + (f/fc)^2N) / (2 pi f)^2, written to stay finite at both ends
+        gain = np.where(r > 1.0, 1.0 / np.sqrt(1.0 + r ** (-2 * n)),
+                        r**n / np.sqrt(1.0 + r ** (2 * n)))
+        h = np.where(f > 0, gain / (2.0 * np.pi * np.where(f > 0, f, 1.0)) ** 2, 0.0)
+    return -a * h
+
+
+# --- order spectra ----------------------------------------------------------------------------
+def _block_amplitudes(blocks: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Amplitude spectra ``(b, N//2+1)`` of blocks ``(b, N)``, coherent gain corrected."""
+    spec = np.abs(np.fft.rfft(blocks * w, axis=-1)) * (2.0 / w.sum())
+    spec[:, 0] /= 2.0
+    if blocks.shape[-1] % 2 == 0:
+        spec[:, -1] /= 2.0
+    return spec
+
+
+def order_spectrum(
+    x_angle: np.ndarray,
+    samples_per_rev: int,
+    *,
+    revolutions: int | None = None,
+    window: str = "hann",
+    speed_rpm: float = float("nan"),
+) -> OrderSpectrum:
+    """Amplitude order spectrum of an angle-domain signal, power-averaged over blocks.
+
+    Parameters
+    ----------
+    x_angle : array_like
+        Signal sampled at ``samples_per_rev`` per revolution, starting at a whole revolution;
+        its length must be a whole number of blocks.
+    samples_per_rev : int
+        Samples per revolution ``P``.
+    revolutions : int, optional
+        Revolutions per block ``R`` (order resolution ``1/R``). Default: the whole signal.
+    window : str
+        A ``scipy.signal.get_window`` name (periodic form); default Hann.
+    speed_rpm : float
+        Mean speed, kept in the result for frequency conversions (rpm).
+
+    Returns
+    -------
+    OrderSpectrum
+        A pure order ``o`` (``o R`` an integer) of amplitude ``A`` reads ``A`` at ``o``.
+
+    Examples
+    --------
+    >>> th = np.arange(8 * 64) / 64                       # 8 revolutions, 64 samples/rev
+    >>> s = order_spectrum(3.0 * np.cos(2 * np.pi * 5 * th), 64, revolutions=4)
+    >>> float(np.round(s.amplitude[s.order == 5][0], 12))
+    3.0
+    """
+    x = _as_1d("x_angle", x_angle)
+    p = _check_int("samples_per_rev", samples_per_rev, 2)
+    if x.size == 0 or x.size % p:
+        raise ValueError(f"`x_angle` must hold whole revolutions of {p} samples, has {x.size}")
+    r = x.size // p if revolutions is None else _check_int("revolutions", revolutions)
+    nb = r * p
+    if x.size % nb:
+        raise ValueError(f"len(`x_angle`)={x.size} must be a multiple of revolutions x "
+                         f"samples_per_rev = {nb}")
+    if not np.all(np.isfinite(x)):
+        raise ValueError("`x_angle` must be finite (gaps are split before the spectrum)")
+    w = _window(window, nb)
+    amp = np.sqrt(np.mean(_block_amplitudes(x.reshape(-1, nb), w) ** 2, axis=0))
+    return OrderSpectrum(
+        order=np.arange(amp.size) / r, amplitude=amp, revolutions=r, n_blocks=x.size // nb,
+        speed_rpm=float(speed_rpm), enbw_bins=float(nb * np.sum(w**2) / np.sum(w) ** 2),
+        max_valid_order=RESAMPLER_PASSBAND * p, window=window)
+
+
+def harmonic_amplitudes(
+    spectrum: OrderSpectrum,
+    orders: Sequence[float] | np.ndarray,
+    *,
+    band_bins: int = 1,
+) -> np.ndarray:
+    r"""Amplitudes of given orders, read over ``+-band_bins`` bins (energy sum).
+
+    :math:`A = \sqrt{\sum_{|k-k_0| \le m} \hat A_k^2 / B_{en}}` with the window's equivalent
+    noise bandwidth ``B_en`` (bins): a pure order on its bin reads its amplitude exactly when
+    ``band_bins`` covers its main lobe (1 for Hann, 0 for a rectangular window).
+
+    Parameters
+    ----------
+    spectrum : OrderSpectrum
+        The spectrum.
+    orders : sequence of float
+        Orders to read (cycles per revolution).
+    band_bins : int
+        Half-width of the band (bins).
+
+    Returns
+    -------
+    numpy.ndarray
+        Amplitudes; NaN for orders above ``spectrum.max_valid_order`` or beyond the spectrum.
+    """
+    m = _check_int("band_bins", band_bins, 0)
+    o = np.atleast_1d(np.asarray(orders, dtype=np.float64))
+    k0 = np.rint(o * spectrum.revolutions).astype(np.int64)
+    out = np.full(o.shape, np.nan)
+    a2 = spectrum.amplitude**2
+    for i, k in enumerate(k0):
+        if k - m < 0 or k + m >= a2.size or o[i] + m / spectrum.revolutions > \
+                spectrum.max_valid_order:
+            continue
+        out[i] = np.sqrt(a2[k - m:k + m + 1].sum() / spectrum.enbw_bins)
+    return out
+
+
+# --- blocks and windows on the angle grid -----------------------------------------------------
+@dataclass(frozen=True)
+class _Block:
+    start: int  # index into the AngleSignal arrays
+    stop: int
+
+
+def _block_spectra(sig: AngleSignal, blocks: Sequence[_Block], w: np.ndarray, revs: int
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per block: amplitude spectra, mean speed (rpm), centre time (s), top valid order."""
+    data = np.stack([sig.values[b.start:b.stop] for b in blocks])
+    amp = _block_amplitudes(data, w)
+    t0 = np.array([sig.time_s[b.start] for b in blocks])
+    # block duration: from its first sample to one angular step past its last
+    t1 = np.array([sig.time_s[b.stop - 1] + 60.0 / (sig.speed_rpm[b.stop - 1]
+                                                     * sig.samples_per_rev) for b in blocks])
+    rpm = 60.0 * revs / (t1 - t0)
+    top = np.array([sig.speed_rpm[b.start:b.stop].max() for b in blocks]) / 60.0
+    max_order = RESAMPLER_PASSBAND * np.minimum(sig.samples_per_rev, sig.input_rate_Hz / top)
+    return amp, rpm, 0.5 * (t0 + t1), max_order
+
+
+def _to_displacement(amp: np.ndarray, orders: np.ndarray, rpm: np.ndarray, highpass_Hz: float,
+                     highpass_order: int) -> np.ndarray:
+    """Amplitudes ``(b, k)`` at ``orders`` ``(k,)`` of blocks at speeds ``rpm`` ``(b,)``."""
+    f = np.asarray(orders)[None, :] * rpm[:, None] / 60.0
+    return np.abs(acceleration_to_displacement(amp, f, highpass_Hz=highpass_Hz,
+                                               highpass_order=highpass_order))
+
+
+def _block_harmonics(amp: np.ndarray, revs: int, orders: Sequence[float], band: int,
+                     enbw: float, max_order: np.ndarray) -> np.ndarray:
+    """Band readouts ``(b, h)`` of ``orders`` from block amplitude spectra ``(b, k)``."""
+    out = np.full((amp.shape[0], len(orders)), np.nan)
+    a2 = amp**2
+    for i, o in enumerate(orders):
+        k = round(o * revs)
+        if k - band < 0 or k + band >= amp.shape[1]:
+            continue
+        val = np.sqrt(a2[:, k - band:k + band + 1].sum(axis=1) / enbw)
+        out[:, i] = np.where(o + band / revs <= max_order, val, np.nan)
+    return out
+
+
+def _aligned_blocks(sig: AngleSignal, sel: np.ndarray, revs: int) -> list[_Block]:
+    """Blocks of ``revs`` whole revolutions inside the contiguous index range ``sel``.
+
+    ``sel`` indexes ``sig``; blocks start at whole revolutions of the angle grid.
+    """
+    if sel.size == 0:
+        return []
+    p = sig.samples_per_rev
+    jj = sig.index[sel]
+    first = int(-(-jj[0] // p) * p)  # first whole revolution
+    nb = revs * p
+    out = []
+    s = sel[0] + (first - jj[0])
+    while s + nb <= sel[-1] + 1:
+        out.append(_Block(int(s), int(s + nb)))
+        s += nb
+    return out
+
+
+def _run_up_windows(sig: AngleSignal, revs: int, hop: int
+                    ) -> tuple[list[_Block], Counter[str]]:
+    """Windows of ``revs`` revolutions every ``hop`` revolutions on the global angle grid.
+
+    Those not lying wholly inside one run are dropped and counted by the run's end reason.
+    """
+    p = sig.samples_per_rev
+    dropped: Counter[str] = Counter()
+    if sig.values.size == 0:
+        return [], dropped
+    j = sig.index
+    run_starts = np.flatnonzero(np.r_[True, sig.run[1:] != sig.run[:-1]])
+    run_stops = np.r_[run_starts[1:], j.size]  # exclusive, indices into sig
+    j_first, j_last = j[run_starts], j[run_stops - 1]
+    n = revs * p
+    r0 = -(-int(j[0]) // (hop * p)) * hop  # first window start (rev), a multiple of hop
+    out = []
+    start_rev = r0
+    while start_rev * p + n - 1 <= j[-1]:
+        a = start_rev * p
+        e = a + n - 1
+        r = int(np.searchsorted(j_first, a, side="right")) - 1  # last run starting at <= a
+        if r >= 0 and a >= j_first[r] and e <= j_last[r]:
+            s = int(run_starts[r] + (a - j_first[r]))
+            out.append(_Block(s, s + n))
+        else:
+            # the break the window meets: the end of run r (or of the run before a)
+            rr = max(r, 0)
+            dropped[sig.run_end[rr] if sig.run_end[rr] != "end" else "gap"] += 1
+        start_rev += hop
+    return out, dropped
+
+
+def _order_windows(
+    x: np.ndarray, sample_rate_Hz: float, speed: SpeedProfile | None, *, start_time_s: float,
+    valid: np.ndarray | None, revs_per_window: int, hop_revs: int | None,
+    samples_per_rev: int, window: str, quantity: str, highpass_Hz: float,
+    highpass_order: int, max_order: float, min_speed_rpm: float,
+) -> tuple[Campbell, np.ndarray, np.ndarray]:
+    """Order spectra of the run-up windows.
+
+    Returns the Campbell data (in ``quantity``), the spectra as given (acceleration) and each
+    window's top valid order.
+    """
+    revs = _check_int("revs_per_window", revs_per_window)
+    hop = revs // 2 if hop_revs is None else _check_int("hop_revs", hop_revs)
+    hop = max(hop, 1)
+    sig = resample_to_angle(x, sample_rate_Hz, speed, samples_per_rev=samples_per_rev,
+                            start_time_s=start_time_s, valid=valid, min_speed_rpm=min_speed_rpm)
+    blocks, dropped = _run_up_windows(sig, revs, hop)
+    ncols = int(np.floor(max_order * revs)) + 1
+    orders = np.arange(ncols) / revs
+    if not blocks:
+        empty = np.empty((0, ncols))
+        return (Campbell(np.empty(0), np.empty(0), orders, "order", empty, quantity,
+                         dict(dropped)), empty, np.empty(0))
+    w = _window(window, revs * sig.samples_per_rev)
+    amps, rpms, times, maxo = [], [], [], []
+    chunk = max(1, (1 << 22) // (revs * sig.samples_per_rev))
+    for i in range(0, len(blocks), chunk):
+        a, r, t, m = _block_spectra(sig, blocks[i:i + chunk], w, revs)
+        amps.append(a[:, :ncols])
+        rpms.append(r)
+        times.append(t)
+        maxo.append(m)
+    acc = np.concatenate(amps)
+    mo = np.concatenate(maxo)
+    rpm = np.concatenate(rpms)
+    amp = acc if quantity == "acceleration" else _to_displacement(acc, orders, rpm, highpass_Hz,
+                                                                  highpass_order)
+    amp[orders[None, :] > mo[:, None]] = np.nan
+    camp = Campbell(np.concatenate(times), rpm, orders, "order", amp, quantity, dict(dropped))
+    return camp, acc, mo

@@ -1,0 +1,339 @@
+"""Spectra, RMS, quality checks and peaks over the channels of a Recording.
+
+:func:`analyse_recording` returns one :class:`ChannelAnalysis` per channel (see
+:mod:`rigtools.analysis.peaks` for the peak method).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from rigtools.analysis.sdof_fit import Response, _check_response
+from rigtools.analysis.spectra import (
+    Average,
+    BandRMS,
+    Clipping,
+    ConstantSignalError,
+    Detrend,
+    InsufficientDataError,
+    SignalError,
+    Spectrum,
+    WelchAccount,
+    Window,
+    _check_band,
+    _check_detrend,
+    _check_fs,
+    _check_noverlap,
+    _mean_square_time,
+    _resolve_nperseg,
+    _welch_core,
+    _window_array,
+    detect_clipping,
+    rms_from_psd,
+    window_properties,
+)
+
+if TYPE_CHECKING:
+    from rigtools.analysis.peaks import ModalEstimate, PeakAnalysis
+
+__all__ = ["ChannelAnalysis", "QualityFlags", "RecordingAnalysis", "analyse_recording"]
+
+
+@dataclass(frozen=True)
+class QualityFlags:
+    """What was used of a channel, and what is wrong with it.
+
+    Attributes
+    ----------
+    n_samples, n_valid, n_invalid : int
+        Samples in the channel, valid and invalid (gaps, rejected).
+    n_segments, n_segments_dropped, n_samples_dropped : int
+        Valid segments used; segments shorter than one window and their samples, dropped.
+    n_windows : int
+        Welch windows averaged.
+    dof : float
+        Equivalent degrees of freedom of each PSD value.
+    clipping : Clipping or None
+    constant : bool
+        Every valid sample equal.
+    too_short : bool
+        No valid segment long enough for the requested resolution.
+    messages : tuple of str
+        Human-readable notes, one per problem.
+    """
+
+    n_samples: int
+    n_valid: int
+    n_invalid: int
+    n_segments: int = 0
+    n_segments_dropped: int = 0
+    n_samples_dropped: int = 0
+    n_windows: int = 0
+    dof: float = 0.0
+    clipping: Clipping | None = None
+    constant: bool = False
+    too_short: bool = False
+    messages: tuple[str, ...] = ()
+
+    @property
+    def clipped(self) -> bool:
+        """The channel holds runs at its extreme values (see :func:`detect_clipping`)."""
+        return bool(self.clipping is not None and self.clipping.clipped)
+
+    @property
+    def ok(self) -> bool:
+        """Analysed, not clipped, nothing dropped."""
+        return not (self.clipped or self.constant or self.too_short or self.n_samples_dropped)
+
+
+@dataclass(frozen=True)
+class ChannelAnalysis:
+    """Spectrum, RMS, peaks and quality of one channel.
+
+    Attributes
+    ----------
+    name, unit : str
+    sample_rate_Hz : float
+    spectrum : Spectrum or None
+        None when the channel could not be analysed (see ``error``).
+    rms : BandRMS or None
+        Full band: time domain (detrended valid segments) and Parseval (PSD integral).
+    band_rms : tuple of BandRMS
+        One per requested band.
+    peaks : PeakAnalysis or None
+    quality : QualityFlags
+    error : str or None
+        Why the channel was not analysed (with ``errors="flag"``).
+    """
+
+    name: str
+    unit: str
+    sample_rate_Hz: float
+    spectrum: Spectrum | None
+    rms: BandRMS | None
+    band_rms: tuple[BandRMS, ...]
+    peaks: PeakAnalysis | None
+    quality: QualityFlags
+    error: str | None = None
+
+    @property
+    def modes(self) -> tuple[ModalEstimate, ...]:
+        """Modal estimates of the structural peaks (empty when none or not analysed)."""
+        return () if self.peaks is None else self.peaks.modes
+
+
+@dataclass(frozen=True)
+class RecordingAnalysis:
+    """Per-channel analysis of a recording, and the settings used.
+
+    Attributes
+    ----------
+    channels : dict of str to ChannelAnalysis
+    settings : dict
+        The analysis parameters (JSON-ready).
+    """
+
+    channels: dict[str, ChannelAnalysis]
+    settings: dict[str, Any] = field(default_factory=dict)
+
+    def __getitem__(self, name: str) -> ChannelAnalysis:
+        return self.channels[name]
+
+
+def _channels_of(rec: Any, names: Sequence[str] | None) -> dict[str, Any]:
+    chans = rec.channels if hasattr(rec, "channels") else rec
+    if not isinstance(chans, Mapping):
+        raise SignalError("rec", "a Recording or a mapping of name to Channel",
+                          type(rec).__name__)
+    if names is None:
+        return dict(chans)
+    missing = [n for n in names if n not in chans]
+    if missing:
+        raise SignalError("channels", f"names of channels in the recording {sorted(chans)}",
+                          repr(missing))
+    return {n: chans[n] for n in names}
+
+
+def analyse_recording(rec: Any, *, channels: Sequence[str] | None = None,
+                      nperseg: int | None = None, resolution_Hz: float | None = None,
+                      noverlap: int | None = None, window: Window = "hann",
+                      detrend: Detrend = "constant", average: Average = "mean",
+                      mesh_frequency_Hz: float | None = None,
+                      shaft_frequencies_Hz: Sequence[float] = (),
+                      bands_Hz: Sequence[Sequence[float]] = (), peaks: bool = True,
+                      prominence_dB: float = 6.0, f_range_Hz: Sequence[float] | None = None,
+                      max_peaks: int = 20, response: Response = "displacement",
+                      clip_min_run: int = 3, full_scale: Sequence[float] | None = None,
+                      errors: Literal["flag", "raise"] = "flag") -> RecordingAnalysis:
+    """Spectra, RMS, natural frequencies and quality flags of a recording's channels.
+
+    Channels that share sample rate, length and validity mask are estimated together in one
+    :func:`scipy.signal.welch` call per valid segment.
+
+    Parameters
+    ----------
+    rec : Recording or mapping of str to Channel
+        The recording (its ``channels``).
+    channels : sequence of str, optional
+        Channels to analyse; default all.
+    nperseg, resolution_Hz, noverlap, window, detrend, average
+        As for :func:`~rigtools.analysis.spectra.welch_psd`.
+    mesh_frequency_Hz, shaft_frequencies_Hz, prominence_dB, f_range_Hz, max_peaks, response
+        As for :func:`analyse_peaks`.
+    bands_Hz : sequence of (float, float)
+        Bands for band-limited RMS (Hz).
+    peaks : bool
+        Look for peaks (False: spectra and RMS only).
+    clip_min_run : int
+        Run of identical extreme samples taken as clipping (:func:`detect_clipping`).
+    full_scale : (float, float), optional
+        Acquisition full scale (unit), e.g. ``(-491.52, 491.505)`` for the reference DBC.
+    errors : {'flag', 'raise'}
+        ``"flag"``: a channel that is constant or too short gets ``error`` and quality flags
+        and no spectrum; ``"raise"``: the :class:`~rigtools.analysis.spectra.SignalError` is
+        raised, naming the channel.
+
+    Returns
+    -------
+    RecordingAnalysis
+    """
+    from rigtools.analysis.peaks import analyse_peaks  # peaks re-exports this module
+    if errors not in ("flag", "raise"):
+        raise SignalError("errors", "'flag' or 'raise'", repr(errors))
+    if average not in ("mean", "median"):
+        raise SignalError("average", "'mean' or 'median'", repr(average))
+    _check_response(response)
+    det = _check_detrend(detrend)
+    chans = _channels_of(rec, channels)
+    bands = [tuple(float(v) for v in b) for b in bands_Hz]
+    settings = {"nperseg": nperseg, "resolution_Hz": resolution_Hz, "noverlap": noverlap,
+                "window": window if not isinstance(window, np.ndarray) else "custom",
+                "detrend": det if not callable(det) else "custom", "average": average,
+                "mesh_frequency_Hz": mesh_frequency_Hz,
+                "shaft_frequencies_Hz": list(shaft_frequencies_Hz), "bands_Hz": bands,
+                "prominence_dB": prominence_dB, "response": response}
+    results: dict[str, ChannelAnalysis] = {}
+    # quality first, then group by (rate, length, mask) for batched Welch
+    groups: dict[tuple[Any, ...], list[str]] = {}
+    prep: dict[str, dict[str, Any]] = {}
+    for name, ch in chans.items():
+        fs = _check_fs(ch.sample_rate_Hz)
+        x = np.asarray(ch.values)
+        v = np.asarray(ch.valid, bool)
+        whole = bool(v.all())
+        n_valid = x.size if whole else int(np.count_nonzero(v))
+        clip = detect_clipping(x, v, min_run=clip_min_run, full_scale=full_scale)
+        base = dict(n_samples=int(x.size), n_valid=n_valid, n_invalid=int(x.size - n_valid))
+        msgs = []
+        if clip.clipped:
+            msgs.append(f"clipped: {clip.n_clipped} samples in {clip.n_runs} run(s) at the "
+                        f"extreme values {clip.low:g} / {clip.high:g} {ch.unit}")
+        prep[name] = dict(ch=ch, fs=fs, x=x, mask=None if whole else v, clip=clip, base=base,
+                          msgs=msgs)
+        if n_valid == 0 or clip.high == clip.low:
+            err = SignalError(name, detail="holds no valid sample") if n_valid == 0 else (
+                _constant_error(name, n_valid, clip.high))
+            _fail(results, name, ch, prep[name], err, errors, constant=n_valid > 0)
+            continue
+        nps = _resolve_nperseg(nperseg, resolution_Hz, fs)
+        key = (fs, x.size, x.dtype.str, nps, b"all" if whole else v.tobytes())
+        groups.setdefault(key, []).append(name)
+    for (fs, n, _, nps, _), names in groups.items():
+        nov = _check_noverlap(noverlap, nps)
+        w = _window_array(window, nps)
+        wkey = window if not isinstance(window, np.ndarray) else w
+        props = window_properties(wkey, nps)
+        first = prep[names[0]]
+        mask = first["mask"]
+        if nps > n:
+            err = _short_error(nps, n, fs, n, "len(x)")
+            for name in names:
+                _fail(results, name, prep[name]["ch"], prep[name], err, errors, too_short=True)
+            continue
+        xs = first["x"][None, :] if len(names) == 1 else np.stack(
+            [prep[nm]["x"] for nm in names])
+        try:
+            freq, P, acc, segs_list = _welch_core(xs, mask, fs, w, nps, nov, det, average,
+                                                  "density", props)
+        except SignalError as e:
+            for name in names:
+                _fail(results, name, prep[name]["ch"], prep[name], e, errors, too_short=True)
+            continue
+        segs = segs_list[0]
+        rows = np.arange(len(names))
+        tot, cnt = _mean_square_time(xs, segs, rows, fs, (0.0, fs / 2), det)
+        band_ms = [(band, *_mean_square_time(xs, segs, rows, fs, band, det))
+                   for band in (_check_band(b, fs) for b in bands)]
+        for i, name in enumerate(names):
+            pr = prep[name]
+            ch = pr["ch"]
+            account = WelchAccount(**{k: getattr(acc, k)[i] for k in (
+                "n_windows", "dof", "n_segments", "n_segments_dropped", "n_samples_dropped",
+                "n_invalid", "n_samples_used")})
+            spec = Spectrum(freq_Hz=freq, unit=ch.unit, fs_Hz=fs, nperseg=nps, noverlap=nov,
+                            window=window, detrend=det, account=account, psd_per_Hz=P[i],
+                            average=average)
+            rms = BandRMS(band_Hz=(0.0, fs / 2), rms_time=float(np.sqrt(tot[i] / cnt)),
+                          rms_parseval=float(rms_from_psd(spec)), unit=ch.unit,
+                          n_samples=int(cnt))
+            brms = [BandRMS(band_Hz=band, rms_time=float(np.sqrt(bt[i] / bc)),
+                            rms_parseval=float(rms_from_psd(spec, band)), unit=ch.unit,
+                            n_samples=int(bc))
+                    for band, bt, bc in band_ms]
+            msgs = list(pr["msgs"])
+            if account.n_segments_dropped:
+                msgs.append(f"{int(account.n_segments_dropped)} valid segment(s) shorter than "
+                            f"one window ({nps} samples) dropped: "
+                            f"{int(account.n_samples_dropped)} samples")
+            quality = QualityFlags(
+                **pr["base"], n_segments=int(account.n_segments),
+                n_segments_dropped=int(account.n_segments_dropped),
+                n_samples_dropped=int(account.n_samples_dropped),
+                n_windows=int(account.n_windows), dof=float(account.dof),
+                clipping=pr["clip"], messages=tuple(msgs))
+            pk = None
+            error = None
+            if peaks:
+                try:
+                    pk = analyse_peaks(spec, mesh_frequency_Hz=mesh_frequency_Hz,
+                                       shaft_frequencies_Hz=shaft_frequencies_Hz,
+                                       prominence_dB=prominence_dB, f_range_Hz=f_range_Hz,
+                                       max_peaks=max_peaks, response=response)
+                except SignalError as e:
+                    if errors == "raise":
+                        raise e.for_channel(name) from e
+                    error = str(e.for_channel(name))
+            results[name] = ChannelAnalysis(name=name, unit=ch.unit, sample_rate_Hz=fs,
+                                            spectrum=spec, rms=rms, band_rms=tuple(brms),
+                                            peaks=pk, quality=quality, error=error)
+    ordered = {name: results[name] for name in chans}
+    return RecordingAnalysis(channels=ordered, settings=settings)
+
+
+def _constant_error(name: str, n_valid: int, value: float) -> SignalError:
+    return ConstantSignalError(
+        "values", detail=f"is constant (all {n_valid} valid samples equal {value!r}): its "
+        "spectrum is zero, no peak or damping can be estimated", channel=name)
+
+
+def _short_error(nps: int, longest: int, fs: float, n: int, what: str) -> SignalError:
+    return InsufficientDataError(
+        "nperseg", f"<= {what}={longest}", str(nps),
+        f"resolution {fs / nps:g} Hz needs {nps / fs:g} s of signal, there are {n / fs:g} s")
+
+
+def _fail(results: dict[str, ChannelAnalysis], name: str, ch: Any, pr: dict[str, Any],
+          err: SignalError, errors: str, constant: bool = False, too_short: bool = False
+          ) -> None:
+    err = err if err.channel == name else err.for_channel(name)
+    if errors == "raise":
+        raise err
+    quality = QualityFlags(**pr["base"], clipping=pr["clip"], constant=constant,
+                           too_short=too_short, messages=(*pr["msgs"], str(err)))
+    results[name] = ChannelAnalysis(name=name, unit=ch.unit, sample_rate_Hz=pr["fs"],
+                                    spectrum=None, rms=None, band_rms=(), peaks=None,
+                                    quality=quality, error=str(err))
