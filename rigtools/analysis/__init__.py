@@ -2,11 +2,14 @@
 
 Modules: :mod:`~rigtools.analysis.windows` (gap-aware segmenting),
 :mod:`~rigtools.analysis.spectra` (Welch PSD, amplitude spectrum, band RMS, quality checks),
-:mod:`~rigtools.analysis.peaks` (peaks, damping, mesh-line classification and the
-:func:`analyse_recording` entry point), :mod:`~rigtools.analysis.speed` (shaft speed from a
-slow signal or a tacho, mesh frequency, speed steps) and :mod:`~rigtools.analysis.orders`
-(angular resampling, order spectra, mesh harmonics and Arms per step and along a run-up,
-displacement, Campbell data).
+:mod:`~rigtools.analysis.peaks` (peak detection and mesh-line classification),
+:mod:`~rigtools.analysis.sdof_fit` (half-power damping and the single-DOF fit),
+:mod:`~rigtools.analysis.recording` (the :func:`analyse_recording` entry point),
+:mod:`~rigtools.analysis.speed` (shaft speed from a slow signal or a tacho, mesh frequency,
+speed steps), :mod:`~rigtools.analysis.resample` (angular resampling),
+:mod:`~rigtools.analysis.order_spectra` (order spectra, mesh harmonics, displacement),
+:mod:`~rigtools.analysis.campbell` (Campbell data), :mod:`~rigtools.analysis.orders` (Arms per
+step and along a run-up) and :mod:`~rigtools.analysis.observations` (the campaign table).
 """
 
 from rigtools.analysis.orders import (
