@@ -9,9 +9,15 @@ on gear 1, load ``T_2`` on gear 4. Mesh forces on the lines of action
 
 with the DTEs ``q_1 = r_1 theta_1 - r_2 theta_2`` and ``q_3 = r_3 theta_2 - r_4 theta_4``
 (base radii) and ``f`` the continuous dead zone of :func:`models.dynamics.sdof.dead_zone`
-(SEED-NOTES 16; the seed's six-state form is garbled: it couples through ``K_12 x_3`` linearly).
-Newton for ``J_1``, ``J_23``, ``J_4`` and subtracting gives the seed's reduction to the two
-relative coordinates (the rigid-body mode drops out):
+(SEED-NOTES 16, instead of the seed's printed ``h k (x - e)``). The seed's printed six-state
+system (states ``q_1, q_1', q_s, q_s', q_3, q_3'``) has a third coordinate, the twist ``q_s``
+of the intermediate shaft between gears 2 and 3, coupled linearly (its ``K_12 x_3``,
+``(K_21 + K_23) x_3``, ``K_32 x_3``): four gears minus the rigid-body mode. With the seed's
+stated assumption of rigid shafts, ``q_s = 0`` and it reduces exactly to the equations below
+(derivation in :class:`SixStateSystem`, which also integrates the six states with a finite
+shaft stiffness as a plain reference; the tests show the DTEs converge to this model as
+``O((omega_n / omega_shaft)^2)``). Newton for ``J_1``, ``J_23``, ``J_4`` and subtracting gives
+the reduction to the two relative coordinates (the rigid-body mode drops out):
 
 .. math:: \ddot q_1 + P_{12}/m_1 = r_1 T_1 / J_1 + a P_{34}, \qquad
           \ddot q_3 + P_{34}/m_3 = r_4 T_2 / J_4 + a P_{12}
@@ -61,8 +67,13 @@ from models.stiffness.mesh_cycle import Harmonics
 
 __all__ = [
     "MeshStage",
+    "SixStateSystem",
     "TwoStageModel",
     "TwoStageResponse",
+    "disc_inertia",
+    "rigid_shaft_model",
+    "six_state_from_gear_sets",
+    "six_state_reference",
     "static_state",
     "two_stage_from_gear_sets",
     "two_stage_periods",
@@ -402,7 +413,262 @@ def _mean_kappa(s: MeshStage) -> float:
     return s.stiffness.mean + (s.thermal.mean if s.thermal is not None else 0.0)
 
 
+# ----------------------------------------------------------------------------- six states
+@dataclass(frozen=True)
+class SixStateSystem:
+    r"""Seed 001's six-state system, dimensional: four gears, flexible intermediate shaft.
+
+    The seed's state vector is ``(x_1, ..., x_6) = (q_1, q_1', q_s, q_s', q_3, q_3')``: the
+    stage-1 DTE, the twist ``q_s = theta_2 - theta_3`` of the intermediate shaft between gears
+    2 and 3, and the stage-2 DTE ``q_3 = r_3 theta_3 - r_4 theta_4``. Newton for
+    ``J_1 .. J_4`` with the shaft torque ``S = k_s q_s + c_s q_s'`` gives
+
+    .. math::
+        \ddot q_1 + P_{12}\left(\tfrac{r_1^2}{J_1} + \tfrac{r_2^2}{J_2}\right)
+            &= \tfrac{r_1 T_1}{J_1} + \tfrac{r_2}{J_2} S, \\
+        \ddot q_s + S\left(\tfrac{1}{J_2} + \tfrac{1}{J_3}\right)
+            &= \tfrac{r_2}{J_2} P_{12} + \tfrac{r_3}{J_3} P_{34}, \\
+        \ddot q_3 + P_{34}\left(\tfrac{r_3^2}{J_3} + \tfrac{r_4^2}{J_4}\right)
+            &= \tfrac{r_4 T_2}{J_4} + \tfrac{r_3}{J_3} S,
+
+    term for term the seed's printed system: ``dx_2/dt`` holds ``f_12`` and the linear
+    ``K_12 x_3`` (shaft) but no ``f_34``; ``dx_4/dt`` holds ``-(K_21 + K_23) x_3`` with both
+    backlash functions; ``dx_6/dt`` holds ``f_34`` and ``K_32 x_3``; the cross-damping terms
+    ``xi_12 x_4``, ``xi_21 x_2``, ``xi_22 x_6``, ``xi_32 x_4`` are the shaft and mesh dampings.
+    The rigid-body rotation is the fourth coordinate that drops out. The seed also states
+    "shafts and bearings are assumed to be rigid": ``k_s -> inf`` forces ``q_s = 0`` and the
+    shaft torque to ``S = (J_3 r_2 P_12 + J_2 r_3 P_34)/(J_2 + J_3)``; put into the first and
+    third equations this is exactly the two-coordinate model of this module with
+    ``J_23 = J_2 + J_3`` (:func:`rigid_shaft_model`). The six-state form is integrated here
+    in a plain reference (:func:`six_state_reference`, scipy's DOP853) so that the reduction
+    is checked numerically; the compiled kernels use the rigid-shaft reduction.
+
+    Attributes
+    ----------
+    inertia_kg_m2 : tuple of 4 float
+        ``J_1 .. J_4`` (kg m^2).
+    base_radius_m : tuple of 4 float
+        ``r_1 .. r_4`` (m), lever arms on the lines of action.
+    mesh_stiffness_N_m : tuple of 2 float
+        Mean mesh stiffnesses ``k_12``, ``k_34`` (N/m); ``k(t) = k_mean kappa(t)``.
+    mesh_damping_N_s_m : tuple of 2 float
+        ``c_12``, ``c_34`` (N s/m).
+    shaft_stiffness_Nm_rad, shaft_damping_Nms_rad : float
+        Intermediate shaft ``k_s`` (N m/rad; ``math.inf`` for the rigid shaft of the seed's
+        assumption, reduction only) and ``c_s`` (N m s/rad).
+    half_backlash_m : tuple of 2 float
+        ``b_12``, ``b_34`` (m).
+    input_torque_Nm, load_torque_Nm : float
+        ``T_1`` on gear 1 and ``T_2`` on gear 4 (N m).
+    stiffness, error_m, thermal : tuples of 2
+        Normalised stiffness ``k_t / k_mean`` and thermal ``k_w / k_mean`` series, and the
+        static transmission errors in metres, over each stage's mesh-cycle phase.
+    mesh_ratio : tuple[int, int]
+        ``(p, q)``: stage-2 mesh frequency is ``p/q`` times stage 1's.
+    """
+
+    inertia_kg_m2: tuple[float, float, float, float]
+    base_radius_m: tuple[float, float, float, float]
+    mesh_stiffness_N_m: tuple[float, float]
+    mesh_damping_N_s_m: tuple[float, float]
+    shaft_stiffness_Nm_rad: float
+    shaft_damping_Nms_rad: float
+    half_backlash_m: tuple[float, float]
+    input_torque_Nm: float
+    load_torque_Nm: float
+    stiffness: tuple[Harmonics, Harmonics] = (_unit(), _unit())
+    error_m: tuple[Harmonics, Harmonics] = (_zero(), _zero())
+    thermal: tuple[Harmonics | None, Harmonics | None] = (None, None)
+    mesh_ratio: tuple[int, int] = (1, 1)
+
+    def __post_init__(self) -> None:
+        vals = (*self.inertia_kg_m2, *self.base_radius_m, *self.mesh_stiffness_N_m)
+        if not all(v > 0 and math.isfinite(v) for v in vals):
+            raise ModelError("SixStateSystem needs finite positive inertias, radii, stiffnesses")
+        if not self.shaft_stiffness_Nm_rad > 0:
+            raise ModelError("`shaft_stiffness_Nm_rad` must be > 0 (math.inf: rigid shaft)")
+        if min(*self.mesh_damping_N_s_m, self.shaft_damping_Nms_rad, *self.half_backlash_m) < 0:
+            raise ModelError("SixStateSystem needs damping and backlash >= 0")
+
+
+def _stage(h: Harmonics | None, ph):
+    return 0.0 if h is None else float(h(ph))
+
+
+def six_state_reference(
+    system: SixStateSystem,
+    mesh_frequency_rad_s: float,
+    y0,
+    t_s,
+    *,
+    rtol: float = 1e-10,
+    atol: float = 1e-16,
+    max_steps_per_period: int = 64,
+) -> np.ndarray:
+    """Integrate the six-state system (class docstring) with scipy's DOP853, plain Python.
+
+    ``mesh_frequency_rad_s`` is the stage-1 mesh frequency (rad/s; stage 1 at phase 0 at
+    ``t = 0``, stage 2 at ``p/q`` of it); ``y0`` is ``(q1, q1', qs, qs', q3, q3')`` in
+    (m, m/s, rad, rad/s, m, m/s); ``t_s`` the output times (s, increasing, from 0).
+    Returns the states at ``t_s``, shape ``(len(t_s), 6)``. The step is limited to
+    ``1 / max_steps_per_period`` of a stage-1 mesh period so the backlash kinks are resolved.
+    """
+    from scipy.integrate import solve_ivp
+
+    sy = system
+    if not math.isfinite(sy.shaft_stiffness_Nm_rad):
+        raise ModelError("six_state_reference needs a finite shaft stiffness")
+    J1, J2, J3, J4 = sy.inertia_kg_m2
+    r1, r2, r3, r4 = sy.base_radius_m
+    k1, k3 = sy.mesh_stiffness_N_m
+    c1, c3 = sy.mesh_damping_N_s_m
+    ks, cs = sy.shaft_stiffness_Nm_rad, sy.shaft_damping_Nms_rad
+    b1, b3 = sy.half_backlash_m
+    p, q = sy.mesh_ratio
+    w = float(mesh_frequency_rad_s)
+
+    def dz(u: float, b: float) -> float:
+        return u - b if u > b else (u + b if u < -b else 0.0)
+
+    def rhs(t: float, y: np.ndarray) -> np.ndarray:
+        ph1 = (w * t / (2 * math.pi)) % 1.0
+        ph3 = (p * w * t / (2 * math.pi * q)) % 1.0
+        kap1 = float(sy.stiffness[0](ph1)) + _stage(sy.thermal[0], ph1)
+        kap3 = float(sy.stiffness[1](ph3)) + _stage(sy.thermal[1], ph3)
+        P12 = k1 * kap1 * dz(y[0] - float(sy.error_m[0](ph1)), b1) + c1 * y[1]
+        P34 = k3 * kap3 * dz(y[4] - float(sy.error_m[1](ph3)), b3) + c3 * y[5]
+        S = ks * y[2] + cs * y[3]
+        a1 = sy.input_torque_Nm * r1 / J1 + r2 / J2 * S - P12 * (r1**2 / J1 + r2**2 / J2)
+        a_s = r2 / J2 * P12 + r3 / J3 * P34 - S * (1 / J2 + 1 / J3)
+        a3 = sy.load_torque_Nm * r4 / J4 + r3 / J3 * S - P34 * (r3**2 / J3 + r4**2 / J4)
+        return np.array([y[1], a1, y[3], a_s, y[5], a3])
+
+    t = np.asarray(t_s, dtype=float)
+    sol = solve_ivp(
+        rhs,
+        (0.0, float(t[-1])),
+        np.asarray(y0, dtype=float).reshape(6),
+        method="DOP853",
+        t_eval=t,
+        rtol=rtol,
+        atol=atol,
+        max_step=2 * math.pi / (w * max_steps_per_period),
+    )
+    if not sol.success:
+        raise ModelError(f"six_state_reference failed: {sol.message}")
+    return np.asarray(sol.y.T)
+
+
+def rigid_shaft_model(
+    system: SixStateSystem, length_scale_m: float | None = None
+) -> tuple[TwoStageModel, dict]:
+    """The seed's rigid-shaft limit of ``system``: the non-dimensional :class:`TwoStageModel`.
+
+    ``J_23 = J_2 + J_3`` (shaft stiffness ignored), ``m_1``, ``m_3``, ``a`` as in the module
+    docstring, ``omega_n = sqrt(k_12 / m_1)``, ``zeta_1 = c_12 / (2 sqrt(k_12 m_1))``,
+    ``zeta_3 = c_34 / (2 sqrt(k_34 m_3))``; ``L`` is ``length_scale_m`` or the stage-1 half
+    backlash. Returns the model and the scales ``omega_n`` (rad/s), ``L`` (m), ``m1``,
+    ``m3`` (kg), ``J`` (``J_1, J_23, J_4``), ``T2`` (N m).
+    """
+    sy = system
+    J1, J2, J3, J4 = sy.inertia_kg_m2
+    r1, r2, r3, r4 = sy.base_radius_m
+    J23 = J2 + J3
+    m1 = 1.0 / (r1**2 / J1 + r2**2 / J23)
+    m3 = 1.0 / (r3**2 / J23 + r4**2 / J4)
+    a = r2 * r3 / J23
+    k1, k3 = sy.mesh_stiffness_N_m
+    c1, c3 = sy.mesh_damping_N_s_m
+    wn = math.sqrt(k1 / m1)
+    L = sy.half_backlash_m[0] if length_scale_m is None else float(length_scale_m)
+    if not L > 0:
+        raise ModelError("length scale must be > 0 (give length_scale_m when backlash is 0)")
+
+    def scaled(hh: Harmonics) -> Harmonics:
+        return Harmonics(hh.mean / L, np.asarray(hh.amplitude) / L, np.asarray(hh.phase_rad))
+
+    st, er, th = sy.stiffness, sy.error_m, sy.thermal
+    b1, b3 = sy.half_backlash_m
+    z1 = c1 / (2 * math.sqrt(k1 * m1))
+    z3 = c3 / (2 * math.sqrt(k3 * m3))
+    model = TwoStageModel(
+        stage1=MeshStage(z1, b1 / L, st[0], scaled(er[0]), th[0]),
+        stage2=MeshStage(z3, b3 / L, st[1], scaled(er[1]), th[1]),
+        force1=r1 * sy.input_torque_Nm / (J1 * wn**2 * L),
+        force2=r4 * sy.load_torque_Nm / (J4 * wn**2 * L),
+        omega2=math.sqrt(k3 / (m3 * wn**2)),
+        coupling1=a * m3,
+        coupling2=a * m1,
+        mesh_ratio=sy.mesh_ratio,
+    )
+    scales = {
+        "omega_n": wn,
+        "L": L,
+        "m1": m1,
+        "m3": m3,
+        "J": (J1, J23, J4),
+        "T2": sy.load_torque_Nm,
+    }
+    return model, scales
+
+
 # ----------------------------------------------------------------------------- gear sets
+def disc_inertia(pair, gear: int) -> float:
+    """Inertia of a solid steel disc at the base radius, ``J = pi rho w r_b^4 / 2`` (kg m^2).
+
+    ``w`` is the pair's (common) face width; no bore, no shaft.
+    """
+    r = pair.base_radius(gear)
+    mat = (pair.pinion if gear == 1 else pair.wheel).material
+    return math.pi * mat.density_kg_m3 * pair.face_width_m * r**4 / 2
+
+
+def six_state_from_gear_sets(
+    stage1_set,
+    stage2_set,
+    *,
+    mean_stiffness_N_m: tuple[float, float],
+    input_torque_Nm: float,
+    half_backlash_m: tuple[float, float],
+    zeta: tuple[float, float] = (0.05, 0.05),
+    shaft_stiffness_Nm_rad: float = math.inf,
+    shaft_damping_Nms_rad: float = 0.0,
+    stiffness: tuple[Harmonics, Harmonics] | None = None,
+    error_m: tuple[Harmonics, Harmonics] | None = None,
+    thermal: tuple[Harmonics | None, Harmonics | None] = (None, None),
+) -> SixStateSystem:
+    """:class:`SixStateSystem` from two :class:`~models.geometry.GearSet` s (gears 1-2, 3-4).
+
+    Disc inertias (:func:`disc_inertia`), base radii as lever arms, load torque
+    ``T_2 = T_1 (r_2 r_4)/(r_1 r_3)`` (static balance), mesh damping from the damping ratios
+    of the rigid-shaft reduction, ``c_i = 2 zeta_i sqrt(k_i m_i)``.
+    """
+    p1, p2 = stage1_set.pair, stage2_set.pair
+    r = (p1.base_radius(1), p1.base_radius(2), p2.base_radius(1), p2.base_radius(2))
+    J = (disc_inertia(p1, 1), disc_inertia(p1, 2), disc_inertia(p2, 1), disc_inertia(p2, 2))
+    J23 = J[1] + J[2]
+    m1 = 1.0 / (r[0] ** 2 / J[0] + r[1] ** 2 / J23)
+    m3 = 1.0 / (r[2] ** 2 / J23 + r[3] ** 2 / J[3])
+    k1, k3 = mean_stiffness_N_m
+    z2, z3 = p1.wheel.teeth, p2.pinion.teeth
+    g = math.gcd(z3, z2)
+    return SixStateSystem(
+        inertia_kg_m2=J,
+        base_radius_m=r,
+        mesh_stiffness_N_m=(float(k1), float(k3)),
+        mesh_damping_N_s_m=(2 * zeta[0] * math.sqrt(k1 * m1), 2 * zeta[1] * math.sqrt(k3 * m3)),
+        shaft_stiffness_Nm_rad=shaft_stiffness_Nm_rad,
+        shaft_damping_Nms_rad=shaft_damping_Nms_rad,
+        half_backlash_m=(float(half_backlash_m[0]), float(half_backlash_m[1])),
+        input_torque_Nm=float(input_torque_Nm),
+        load_torque_Nm=float(input_torque_Nm) * r[1] * r[3] / (r[0] * r[2]),
+        stiffness=stiffness or (_unit(), _unit()),
+        error_m=error_m or (_zero(), _zero()),
+        thermal=thermal,
+        mesh_ratio=(z3 // g, z2 // g),
+    )
+
+
 def two_stage_from_gear_sets(
     stage1_set,
     stage2_set,
@@ -418,48 +684,23 @@ def two_stage_from_gear_sets(
 ) -> tuple[TwoStageModel, dict]:
     """Build the model from two :class:`~models.geometry.GearSet` s (gears 1-2 and 3-4).
 
-    Inertias of solid steel discs at the base radius (``J = pi rho w r^4 / 2``, face width
-    of the pair; no bores, shafts rigid), base radii as lever arms, load torque
-    ``T_2 = T_1 (r_2 r_4)/(r_1 r_3)`` (static balance). ``stiffness`` are normalised series
+    :func:`six_state_from_gear_sets` with a rigid intermediate shaft (seed 001's assumption),
+    reduced by :func:`rigid_shaft_model`: solid discs at the base radius
+    (``J = pi rho w r^4 / 2``, face width of the pair; no bores), base radii as lever arms,
+    load torque ``T_2 = T_1 (r_2 r_4)/(r_1 r_3)``. ``stiffness`` are normalised series
     (mean 1), ``error_m`` in metres, ``thermal`` normalised by the stage mean stiffness.
     Returns the model and a dict of the dimensional scales (``omega_n``, ``L``, ``m1``,
-    ``m3``, inertias).
+    ``m3``, inertias ``J = (J_1, J_23, J_4)``, ``T2``).
     """
-    p1, p2 = stage1_set.pair, stage2_set.pair
-    r1, r2 = p1.base_radius(1), p1.base_radius(2)
-    r3, r4 = p2.base_radius(1), p2.base_radius(2)
-
-    def disc(pair, r, g):
-        mat = (pair.pinion if g == 1 else pair.wheel).material
-        return math.pi * mat.density_kg_m3 * pair.face_width_m * r**4 / 2
-
-    J1, J23, J4 = disc(p1, r1, 1), disc(p1, r2, 2) + disc(p2, r3, 1), disc(p2, r4, 2)
-    m1 = 1.0 / (r1**2 / J1 + r2**2 / J23)
-    m3 = 1.0 / (r3**2 / J23 + r4**2 / J4)
-    a = r2 * r3 / J23
-    k1, k3 = mean_stiffness_N_m
-    wn = math.sqrt(k1 / m1)
-    L = half_backlash_m[0] if length_scale_m is None else length_scale_m
-    if not L > 0:
-        raise ModelError("length scale must be > 0 (give length_scale_m when backlash is 0)")
-    T1 = input_torque_Nm
-    T2 = T1 * r2 * r4 / (r1 * r3)
-    z2, z3 = p1.wheel.teeth, p2.pinion.teeth
-    g = math.gcd(z3, z2)
-    st = stiffness or (_unit(), _unit())
-    er = error_m or (_zero(), _zero())
-
-    def scaled(hh: Harmonics) -> Harmonics:
-        return Harmonics(hh.mean / L, np.asarray(hh.amplitude) / L, np.asarray(hh.phase_rad))
-
-    model = TwoStageModel(
-        stage1=MeshStage(zeta[0], half_backlash_m[0] / L, st[0], scaled(er[0]), thermal[0]),
-        stage2=MeshStage(zeta[1], half_backlash_m[1] / L, st[1], scaled(er[1]), thermal[1]),
-        force1=r1 * T1 / (J1 * wn**2 * L),
-        force2=r4 * T2 / (J4 * wn**2 * L),
-        omega2=math.sqrt(k3 / (m3 * wn**2)),
-        coupling1=a * m3,
-        coupling2=a * m1,
-        mesh_ratio=(z3 // g, z2 // g),
+    system = six_state_from_gear_sets(
+        stage1_set,
+        stage2_set,
+        mean_stiffness_N_m=mean_stiffness_N_m,
+        input_torque_Nm=input_torque_Nm,
+        half_backlash_m=half_backlash_m,
+        zeta=zeta,
+        stiffness=stiffness,
+        error_m=error_m,
+        thermal=thermal,
     )
-    return model, {"omega_n": wn, "L": L, "m1": m1, "m3": m3, "J": (J1, J23, J4), "T2": T2}
+    return rigid_shaft_model(system, length_scale_m)

@@ -6,7 +6,9 @@ The presentation layer (STYLE.md, convention 5): plotting functions read the res
 
 Modules: ``stiffness`` (VVMS/FVMS, load sharing and LSTE over a mesh cycle; seed 003 Figs. 4, 6),
 ``thermal`` (thermoelastic mean mesh stiffness and mesh natural frequency against torque, with
-the critical compensation gap and the jammed state; seed 000 Tables 5-6).
+the critical compensation gap and the jammed state; seed 000 Tables 5-6), ``two_stage`` (peak-DTE
+maps over mesh frequency x bulk temperature and bifurcation diagrams of the two-stage model;
+seed 001).
 """
 
 from rigtools.plots.stiffness import (
@@ -23,14 +25,17 @@ from rigtools.plots.thermal import (
     seed_000_hot_state_closure,
     thermal_figures,
 )
+from rigtools.plots.two_stage import plot_bifurcation, plot_peak_dte_map
 
 __all__ = [
     "FIGURE_WIDTH_IN",
     "TABLE_6_TORQUES_NM",
     "ThermalClosure",
     "mesh_cycle_figures",
+    "plot_bifurcation",
     "plot_mesh_cycle",
     "plot_natural_frequency_vs_load",
+    "plot_peak_dte_map",
     "plot_stiffness_vs_load",
     "save_png",
     "seed_000_hot_state_closure",

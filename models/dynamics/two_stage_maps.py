@@ -1,0 +1,812 @@
+r"""Peak-DTE maps over mesh frequency x bulk temperature and bifurcation data (seed 001).
+
+Seed 001 studies its two-stage torsional model (:mod:`models.dynamics.two_stage`) "across
+parameter planes defined by mesh frequency and bulk (body) temperature" through "the maximum
+amplitude of the dynamic transmission error", and reports jumps (bifurcations) between regimes.
+This module builds the model at each bulk temperature from the shipped gear sets
+(``two-stage-45-steel`` and ``two-stage-45-steel-stage2``, seed 001's parameter table),
+computes the maps in parallel, and returns Poincare samples for bifurcation diagrams.
+
+What depends on temperature, and from which equation
+----------------------------------------------------
+Only the mesh stiffness, through seed 001's temperature stiffness (its ``k = k_t + k_w``):
+
+* the contact temperature rise over the initial temperature ``Delta_0`` is
+  ``Delta(t) = Delta_M + Delta_f(t) - Delta_0`` (seed 001, ``Delta_B = Delta_M + Delta_f``),
+  ``Delta_M`` the bulk temperature (the map axis) and ``Delta_f`` Blok's flash temperature
+  (:func:`models.thermal.flash_temperature`, effusivity form of SEED-NOTES 12, Hertz
+  half-width of SEED-NOTES 13, seed 000's load share ``R`` and friction 0.132 since seed 001
+  gives no value). The flash temperature depends on the speed, so on the mesh frequency:
+  it is evaluated at the speed of each map column (``n_1 = 60 f_mesh / z_1``);
+* the profile deformations ``sigma_i`` are the flank normal deformations of
+  :func:`models.thermal.thermal_deformation` with the reference at ``Delta_0``, the gear body
+  uniformly at the bulk temperature, the flash temperature as the local rise, and a fixed
+  centre distance (seed 001 says nothing about the housing);
+* per tooth pair ``j`` in the path of contact at mesh phase ``tau``,
+  ``k_{w,j} = F R_j / (sigma_1 + sigma_2)`` (seed 001's ``k_wi = F/(b sigma_i)`` in series,
+  times the face width, :func:`models.thermal.temperature_stiffness`), and the pairs in contact
+  add in parallel: ``k_w(tau) = sum_j k_{w,j}``. Divided by the stage's mean ``k_t`` and
+  expanded in ``n_harmonics`` mesh harmonics, it is the ``thermal`` series of
+  :class:`~models.dynamics.MeshStage` (``k_w`` steps where a pair enters or leaves the
+  path, seed 000's share jumping from 0 to 0.36: the truncated series rings there, as the
+  stiffness harmonics of :mod:`models.stiffness.mesh_cycle` do).
+
+``k_w`` *falls* as the temperature rises (``sigma`` grows linearly with the rise) and
+diverges as the rise vanishes (the seed's formula; see
+:func:`models.thermal.temperature_stiffness`): bulk temperatures must lie above ``Delta_0``.
+The mesh stiffness is always above ``k_t``, so the natural frequencies sit above the
+isothermal ones and drift down as the gears heat.
+
+The backlash does not depend on temperature in seed 001 (its ``D_12``, ``D_34`` are fixed
+parameters of each map). Seed 000's physics (thermal expansion closes the gap) is available
+as an option: with ``TwoStageThermalSetup.backlash_reference`` a
+:class:`~models.thermal.ThermalReference`, each stage's half backlash becomes
+``b - (Delta_1 + Delta_2) / 2`` at the pitch point for the gears uniformly at the bulk
+temperature (no flash); a closure larger than the gap is the jammed state of SEED-NOTES 10
+and raises :class:`~models.errors.ModelError`.
+
+Other inputs seed 001 leaves open (defaults of :class:`TwoStageThermalSetup`): the load
+(seed 001's "moderate" 10 kN normal load on stage 1), the mean mesh stiffness (ISO 6336-1's
+typical ``c_gamma = 20 N/(mm um)`` times the 95 mm face width), the non-dimensional length
+(10 um, so the seed's ``D = 1`` is a 10 um half backlash), the stiffness fluctuation (one
+harmonic, the seed's ``k = 0.2``; or, with ``stiffness_source="mesh-cycle"``, the VVMS of
+:func:`models.stiffness.mesh_cycle` from the potential-energy compliance, whose means, 1.72e9
+and 1.79e9 N/m at 10 and 20 kN, are within 10 % of the ISO default), the error (one harmonic,
+the seed's ``e = 0.2``) and 5 % damping.
+
+Computation
+-----------
+The map is a grid of steady responses, the state carried along frequency within a row
+(up-sweep, or down), the rows (temperatures) independent: a numba ``prange`` over rows
+(``parallel=True``), each row serial. The per-point work is the compiled RK4 of
+:func:`models.dynamics.two_stage_periods` (the same kernel, so a map point is bit for bit
+:func:`~models.dynamics.two_stage_steady_response` from the same start), the serial and the
+parallel drivers run the same row function, so their results are identical.
+Peak DTE is ``max |q|`` over the recorded periods at the RK4 step starts (metres); contact
+loss and back-side contact flags are those of :class:`~models.dynamics.TwoStageResponse`.
+The Poincare samples are the DTEs at the end of each recorded *system* period (``q``
+stage-1 mesh periods, the period of the combined excitation): one distinct value per
+frequency for a period-1 response, ``n`` for period ``n``, a cloud for chaos.
+
+References
+----------
+.. [1] Seed 001, "Nonlinear Dynamics of Spur Gear Systems: The Critical Role of Contact
+   Temperature" (two-stage model, temperature stiffness, maps over mesh frequency and bulk
+   temperature).
+.. [2] ISO 6336-1:2019, *Calculation of load capacity of spur and helical gears - Part 1*,
+   mesh stiffness ``c_gamma``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Literal
+
+import numpy as np
+from numba import njit, prange
+
+from models.dynamics.two_stage import (
+    TwoStageModel,
+    _run,
+    rigid_shaft_model,
+    six_state_from_gear_sets,
+    static_state,
+)
+from models.errors import ModelError
+from models.geometry import GearSet, load_gear_set
+from models.geometry.gear_pair import GearPair
+from models.stiffness.load_distribution import load_share_seed_000
+from models.stiffness.mesh_cycle import Harmonics, mesh_cycle, tabulate_compliance
+from models.stiffness.potential_energy import pair_compliance
+from models.thermal import (
+    FRICTION_SEED_000,
+    GearTemperature,
+    ThermalReference,
+    flash_temperature,
+    temperature_stiffness,
+    thermal_deformation,
+)
+
+__all__ = [
+    "Bifurcation",
+    "PeakDTEMap",
+    "ThermalStiffness",
+    "TwoStageThermalSetup",
+    "bifurcation_over_frequency",
+    "bifurcation_over_temperature",
+    "peak_dte_map",
+    "thermal_stiffness_component",
+    "two_stage_at_temperature",
+]
+
+
+# ----------------------------------------------------------------------------- setup
+@dataclass(frozen=True)
+class TwoStageThermalSetup:
+    """Inputs of the thermal two-stage model (defaults: the choices in the module docstring).
+
+    Attributes
+    ----------
+    stage1, stage2 : str
+        Names of the shipped gear sets (gears 1-2 and 3-4).
+    normal_load_N : float
+        Stage-1 normal load ``F = T_1 / r_b1`` (N); ``T_1`` follows, ``T_2`` by static balance.
+    mean_stiffness_N_m : tuple of 2 float
+        Mean load-sharing mesh stiffness ``k_t`` of each stage (N/m).
+    stiffness_fluctuation : tuple of 2 float
+        ``k_t / k_mean = 1 + k cos(2 pi tau)`` (-), seed 001's ``k``.
+    stiffness_source : {"harmonic", "mesh-cycle"}
+        ``"harmonic"``: ``k_t`` from ``mean_stiffness_N_m`` and ``stiffness_fluctuation``
+        (seed 001's parametrisation). ``"mesh-cycle"``: ``k_t(tau)`` is the VVMS of
+        :func:`models.stiffness.mesh_cycle` at the stage's normal load with the
+        potential-energy tooth-pair compliance (Hertz term included, corner contact on),
+        its mean and ``n_harmonics`` harmonics; ``mean_stiffness_N_m`` and
+        ``stiffness_fluctuation`` are then ignored.
+    error_amplitude_m : tuple of 2 float
+        Static transmission error ``e cos(2 pi tau)`` (m).
+    half_backlash_m : tuple of 2 float
+        Half backlash ``b`` at the initial temperature (m).
+    length_scale_m : float
+        Non-dimensional length ``L`` (m): seed 001's ``D = b / L``.
+    zeta : tuple of 2 float
+        Damping ratios (-).
+    initial_temperature_C : float
+        Seed 001's ``Delta_0`` (deg C), from which the thermal deformation counts.
+    friction_coefficient : float
+        For the flash temperature (-).
+    flash : bool
+        Add the flash temperature to the contact temperature rise (seed 001: yes).
+    thermal : bool
+        Include the temperature stiffness at all (False: isothermal ``k_t`` only).
+    backlash_reference : ThermalReference or None
+        None: backlash independent of temperature (seed 001). Otherwise the reference of
+        seed 000's thermal closure of the gap (module docstring).
+    n_phases, n_harmonics : int
+        Samples of ``k_w`` over a mesh cycle, and harmonics kept.
+    """
+
+    stage1: str = "two-stage-45-steel"
+    stage2: str = "two-stage-45-steel-stage2"
+    normal_load_N: float = 1.0e4
+    mean_stiffness_N_m: tuple[float, float] = (1.9e9, 1.9e9)
+    stiffness_fluctuation: tuple[float, float] = (0.2, 0.2)
+    stiffness_source: Literal["harmonic", "mesh-cycle"] = "harmonic"
+    error_amplitude_m: tuple[float, float] = (2.0e-6, 2.0e-6)
+    half_backlash_m: tuple[float, float] = (10.0e-6, 10.0e-6)
+    length_scale_m: float = 10.0e-6
+    zeta: tuple[float, float] = (0.05, 0.05)
+    initial_temperature_C: float = 20.0
+    friction_coefficient: float = FRICTION_SEED_000
+    flash: bool = True
+    thermal: bool = True
+    backlash_reference: ThermalReference | None = None
+    n_phases: int = 128
+    n_harmonics: int = 10
+
+    def __post_init__(self) -> None:
+        if not (self.normal_load_N >= 0 and self.length_scale_m > 0):
+            raise ModelError("`normal_load_N` must be >= 0 and `length_scale_m` > 0")
+        if not (self.n_phases >= 2 * self.n_harmonics + 2 and self.n_harmonics >= 0):
+            raise ModelError("`n_phases` must be >= 2 n_harmonics + 2")
+        if self.stiffness_source not in ("harmonic", "mesh-cycle"):
+            raise ModelError(
+                f"`stiffness_source` must be 'harmonic' or 'mesh-cycle', was "
+                f"{self.stiffness_source!r}"
+            )
+
+    def gear_sets(self) -> tuple[GearSet, GearSet]:
+        """The two shipped gear sets (stage 1, stage 2)."""
+        return load_gear_set(self.stage1), load_gear_set(self.stage2)
+
+
+# ----------------------------------------------------------------------------- thermal part
+@dataclass(frozen=True)
+class ThermalStiffness:
+    """Seed 001's temperature stiffness of one stage over a mesh cycle, for several speeds.
+
+    Attributes
+    ----------
+    phase : numpy.ndarray
+        Mesh-cycle phases ``tau`` (-), shape ``(n_phases,)`` (``tau = 0``: a pair at A).
+    pinion_speed_rpm : numpy.ndarray
+        Speeds (1/min), shape ``(n_speeds,)``.
+    k_w_N_m : numpy.ndarray
+        ``k_w(tau) = sum_j F R_j / (sigma_1 + sigma_2)`` (N/m), shape ``(n_speeds, n_phases)``.
+    flash_max_K : numpy.ndarray
+        Highest flash temperature over the cycle (K), shape ``(n_speeds,)``.
+    harmonics : tuple of Harmonics
+        ``k_w / k_mean`` as a mesh-harmonic series, one per speed.
+    """
+
+    phase: np.ndarray
+    pinion_speed_rpm: np.ndarray
+    k_w_N_m: np.ndarray
+    flash_max_K: np.ndarray
+    harmonics: tuple[Harmonics, ...]
+
+
+def _fit(values: np.ndarray, n_harmonics: int) -> Harmonics:
+    c = np.fft.rfft(values) / values.size
+    k = slice(1, n_harmonics + 1)
+    return Harmonics(float(c[0].real), 2 * np.abs(c[k]), np.angle(c[k]))
+
+
+def thermal_stiffness_component(
+    pair: GearPair,
+    bulk_temperature_C: float,
+    pinion_speed_rpm,
+    normal_load_N: float,
+    *,
+    mean_stiffness_N_m: float,
+    initial_temperature_C: float = 20.0,
+    friction_coefficient: float = FRICTION_SEED_000,
+    flash: bool = True,
+    n_phases: int = 128,
+    n_harmonics: int = 10,
+) -> ThermalStiffness:
+    r"""Seed 001's temperature stiffness ``k_w(tau)`` of one spur stage (module docstring).
+
+    Parameters
+    ----------
+    pair : GearPair
+        Contact ratio in [1, 2) (seed 000's load share).
+    bulk_temperature_C : float
+        Bulk temperature ``Delta_M`` (deg C), > ``initial_temperature_C``.
+    pinion_speed_rpm : array_like
+        Pinion speeds (1/min), > 0 (only the flash temperature depends on them).
+    normal_load_N : float
+        Total normal load ``F`` of the stage (N).
+    mean_stiffness_N_m : float
+        ``k_t`` mean (N/m) that normalises the harmonics.
+    initial_temperature_C, friction_coefficient, flash, n_phases, n_harmonics
+        As in :class:`TwoStageThermalSetup`.
+
+    Returns
+    -------
+    ThermalStiffness
+
+    Notes
+    -----
+    .. math:: k_w(\tau) = \sum_j \frac{F R(s_j)}{\sigma_1(s_j) + \sigma_2(s_j)}, \quad
+              s_j = A + (\tau + j) p_b \in [A, E]
+
+    with ``sigma_i`` the normal flank deformations under ``Delta_M + Delta_f - Delta_0``.
+
+    Examples
+    --------
+    Without flash, a uniform rise ``dT`` deforms the flanks by ``xi dT rho_i`` (similarity),
+    so ``k_w = F / (xi dT (rho_1 + rho_2))`` per pair: halving the rise doubles ``k_w``.
+
+    >>> from models.geometry import load_gear_set
+    >>> g = load_gear_set("two-stage-45-steel").pair
+    >>> kw = [thermal_stiffness_component(g, t, 1000.0, 1e4, mean_stiffness_N_m=1.9e9,
+    ...       flash=False).k_w_N_m.mean() for t in (60.0, 100.0)]
+    >>> round(float(kw[0] / kw[1]), 6)
+    2.0
+    """
+    t_b = float(bulk_temperature_C)
+    t0 = float(initial_temperature_C)
+    if not t_b > t0:
+        raise ModelError(
+            f"`bulk_temperature_C` must exceed the initial temperature {t0} deg C, was {t_b}: "
+            "seed 001's k_w = F / (b sigma) diverges as the thermal deformation vanishes"
+        )
+    speed = np.atleast_1d(np.asarray(pinion_speed_rpm, dtype=float))
+    if speed.ndim != 1 or np.any(~(speed > 0)):
+        raise ModelError("`pinion_speed_rpm` must be a 1-d array of speeds > 0")
+    phase = np.arange(int(n_phases)) / int(n_phases)
+    a, e, pb = pair.start_of_contact, pair.end_of_contact, pair.base_pitch
+    n_slots = math.ceil(pair.contact_ratio) + 1
+    s = a + (phase[:, None] + np.arange(n_slots)[None, :]) * pb  # (P, slots)
+    share = np.where(s <= e, load_share_seed_000(pair, np.minimum(s, e)), 0.0)
+    s_eval = np.minimum(s, e)
+    ref = ThermalReference(t0, flash_counts_as_local_rise=bool(flash))
+    torque = normal_load_N * pair.base_radius(1)
+    ft = flash_temperature(
+        pair,
+        s_eval,
+        torque,
+        speed[:, None, None],
+        bulk_temperature_C=t_b,
+        friction_coefficient=friction_coefficient,
+        load_share=share,
+    )
+    d = thermal_deformation(
+        pair, s_eval, ref, GearTemperature.uniform(t_b), flash=ft if flash else None
+    )
+    sig1 = np.broadcast_to(d.pinion.normal_m, (speed.size, *s.shape))
+    sig2 = np.broadcast_to(d.wheel.normal_m, (speed.size, *s.shape))
+    kw = temperature_stiffness(normal_load_N * share, pair.face_width_m, sig1, sig2)
+    k_pair = np.where(share > 0, kw.pair_N_m, 0.0)
+    k_w = k_pair.sum(axis=-1)
+    harm = tuple(_fit(row / mean_stiffness_N_m, int(n_harmonics)) for row in k_w)
+    fmax = np.broadcast_to(ft.flash_K, (speed.size, *s.shape)).max(axis=(1, 2))
+    return ThermalStiffness(phase, speed, k_w, fmax, harm)
+
+
+def _closure_half_backlash(
+    setup: TwoStageThermalSetup, pair: GearPair, b: float, temperature_C: float
+) -> float:
+    ref = setup.backlash_reference
+    if ref is None:
+        return b
+    d = thermal_deformation(pair, [pair.pitch_point], ref, GearTemperature.uniform(temperature_C))
+    b_t = b - 0.5 * float(d.total_m[0])
+    if b_t < 0:
+        raise ModelError(
+            f"thermal closure {float(d.total_m[0]) * 1e6:.3g} um at {temperature_C} deg C "
+            f"exceeds the gap 2b = {2 * b * 1e6:.3g} um: the gears are jammed (SEED-NOTES 10)"
+        )
+    return b_t
+
+
+@lru_cache(maxsize=16)
+def _vvms(gear_set: str, normal_load_N: float, n_phases: int, n_harmonics: int) -> Harmonics:
+    """VVMS harmonics (N/m) of a shipped gear set at a normal load (potential energy + Hertz)."""
+    pair = load_gear_set(gear_set).pair
+    comp = tabulate_compliance(pair, lambda s: pair_compliance(pair, s).total_m_per_N)
+    cyc = mesh_cycle(
+        pair,
+        comp,
+        normal_load_N * pair.base_radius(1),
+        n_phases=n_phases,
+        n_harmonics=n_harmonics,
+    )
+    return cyc.vvms_harmonics
+
+
+def _models_at_temperature(
+    setup: TwoStageThermalSetup, temperature_C: float, frequencies_Hz: np.ndarray
+) -> list[tuple[TwoStageModel, dict, float]]:
+    g1, g2 = setup.gear_sets()
+    p1, p2 = g1.pair, g2.pair
+    r1, r2, r3 = p1.base_radius(1), p1.base_radius(2), p2.base_radius(1)
+    t1 = setup.normal_load_N * r1
+    f2 = t1 * (r2 / r1) / r3  # stage-2 normal load T_3 / r_b3, T_3 = T_1 r_2 / r_1
+    n1 = 60.0 * frequencies_Hz / p1.pinion.teeth
+    n3 = n1 * p1.pinion.teeth / p1.wheel.teeth
+    kf, ea = setup.stiffness_fluctuation, setup.error_amplitude_m
+    z = np.zeros(1)
+    if setup.stiffness_source == "mesh-cycle":
+        v1 = _vvms(setup.stage1, setup.normal_load_N, setup.n_phases, setup.n_harmonics)
+        v2 = _vvms(setup.stage2, f2, setup.n_phases, setup.n_harmonics)
+        km = (v1.mean, v2.mean)
+        stiff = tuple(Harmonics(1.0, v.amplitude / v.mean, v.phase_rad.copy()) for v in (v1, v2))
+    else:
+        km = setup.mean_stiffness_N_m
+        stiff = (Harmonics(1.0, np.array([kf[0]]), z), Harmonics(1.0, np.array([kf[1]]), z))
+    if setup.thermal:
+        th1 = thermal_stiffness_component(
+            p1,
+            temperature_C,
+            n1,
+            setup.normal_load_N,
+            mean_stiffness_N_m=km[0],
+            initial_temperature_C=setup.initial_temperature_C,
+            friction_coefficient=setup.friction_coefficient,
+            flash=setup.flash,
+            n_phases=setup.n_phases,
+            n_harmonics=setup.n_harmonics,
+        ).harmonics
+        th2 = thermal_stiffness_component(
+            p2,
+            temperature_C,
+            n3,
+            f2,
+            mean_stiffness_N_m=km[1],
+            initial_temperature_C=setup.initial_temperature_C,
+            friction_coefficient=setup.friction_coefficient,
+            flash=setup.flash,
+            n_phases=setup.n_phases,
+            n_harmonics=setup.n_harmonics,
+        ).harmonics
+    b = (
+        _closure_half_backlash(setup, p1, setup.half_backlash_m[0], temperature_C),
+        _closure_half_backlash(setup, p2, setup.half_backlash_m[1], temperature_C),
+    )
+    err = (Harmonics(0.0, np.array([ea[0]]), z), Harmonics(0.0, np.array([ea[1]]), z))
+    out = []
+    for i, f in enumerate(frequencies_Hz):
+        system = six_state_from_gear_sets(
+            g1,
+            g2,
+            mean_stiffness_N_m=km,
+            input_torque_Nm=t1,
+            half_backlash_m=b,
+            zeta=setup.zeta,
+            stiffness=(stiff[0], stiff[1]),
+            error_m=err,
+            thermal=(th1[i], th2[i]) if setup.thermal else (None, None),
+        )
+        model, scales = rigid_shaft_model(system, setup.length_scale_m)
+        out.append((model, scales, 2 * math.pi * float(f) / scales["omega_n"]))
+    return out
+
+
+def two_stage_at_temperature(
+    temperature_C: float, frequency_Hz: float, setup: TwoStageThermalSetup | None = None
+) -> tuple[TwoStageModel, dict, float]:
+    """The model at one bulk temperature and stage-1 mesh frequency (module docstring).
+
+    Returns the non-dimensional model, its scales (``omega_n`` in rad/s, ``L`` in m, ...,
+    as :func:`~models.dynamics.two_stage.rigid_shaft_model`) and ``Lambda``, the stage-1
+    mesh frequency over ``omega_n`` to pass to :func:`~models.dynamics.two_stage_periods`.
+    The frequency enters the model only through the flash temperature's speed.
+    """
+    s = setup or TwoStageThermalSetup()
+    return _models_at_temperature(s, float(temperature_C), np.array([float(frequency_Hz)]))[0]
+
+
+# ----------------------------------------------------------------------------- kernels
+@njit(cache=True)
+def _fill_row(
+    i, Y0, P, T, H, order, carry, n_trans, n_rec, peak, amp, loss, back, poinc
+):  # pragma: no cover - compiled
+    y = Y0[i, order[0]].copy()
+    for jj in range(order.size):
+        j = order[jj]
+        if not carry:
+            y = Y0[i, j].copy()
+        pts, _ = _run(y, P[i, j], T[i, j], H[j], n_trans, False)
+        if n_trans > 0:
+            y = pts[n_trans - 1].copy()
+        pts2, hist = _run(y, P[i, j], T[i, j], H[j], n_rec, True)
+        b1 = P[i, j, 1]
+        b3 = P[i, j, 3]
+        mx1 = 0.0
+        mx3 = 0.0
+        lo1 = hist[0, 0]
+        hi1 = hist[0, 0]
+        lo3 = hist[0, 2]
+        hi3 = hist[0, 2]
+        l1 = False
+        l3 = False
+        k1 = False
+        k3 = False
+        for r in range(hist.shape[0]):
+            x1 = hist[r, 0]
+            x3 = hist[r, 2]
+            u1 = hist[r, 1]
+            u3 = hist[r, 3]
+            mx1 = max(mx1, abs(x1))
+            mx3 = max(mx3, abs(x3))
+            lo1 = min(lo1, x1)
+            hi1 = max(hi1, x1)
+            lo3 = min(lo3, x3)
+            hi3 = max(hi3, x3)
+            if b1 > 0 and abs(u1) <= b1:
+                l1 = True
+            if b3 > 0 and abs(u3) <= b3:
+                l3 = True
+            if u1 < -b1:
+                k1 = True
+            if u3 < -b3:
+                k3 = True
+        peak[i, j, 0] = mx1
+        peak[i, j, 1] = mx3
+        amp[i, j, 0] = (hi1 - lo1) / 2
+        amp[i, j, 1] = (hi3 - lo3) / 2
+        loss[i, j, 0] = l1
+        loss[i, j, 1] = l3
+        back[i, j, 0] = k1
+        back[i, j, 1] = k3
+        for s in range(n_rec):
+            poinc[i, j, s, 0] = pts2[s, 0]
+            poinc[i, j, s, 1] = pts2[s, 2]
+        y = pts2[n_rec - 1].copy()
+
+
+def _alloc(Y0, n_rec):
+    nt, nf = Y0.shape[0], Y0.shape[1]
+    return (
+        np.empty((nt, nf, 2)),
+        np.empty((nt, nf, 2)),
+        np.zeros((nt, nf, 2), dtype=np.bool_),
+        np.zeros((nt, nf, 2), dtype=np.bool_),
+        np.empty((nt, nf, n_rec, 2)),
+    )
+
+
+@njit(parallel=True, cache=True)
+def _map_parallel(
+    Y0, P, T, H, order, carry, n_trans, n_rec, peak, amp, loss, back, poinc
+):  # pragma: no cover - compiled
+    for i in prange(Y0.shape[0]):
+        _fill_row(i, Y0, P, T, H, order, carry, n_trans, n_rec, peak, amp, loss, back, poinc)
+
+
+@njit(cache=True)
+def _map_serial(
+    Y0, P, T, H, order, carry, n_trans, n_rec, peak, amp, loss, back, poinc
+):  # pragma: no cover - compiled
+    for i in range(Y0.shape[0]):
+        _fill_row(i, Y0, P, T, H, order, carry, n_trans, n_rec, peak, amp, loss, back, poinc)
+
+
+# ----------------------------------------------------------------------------- maps
+@dataclass(frozen=True)
+class PeakDTEMap:
+    """Steady response of both stages over a grid of mesh frequency x bulk temperature.
+
+    Arrays are indexed ``[temperature, frequency, stage]`` (stage 0: gears 1-2, 1: gears 3-4).
+
+    Attributes
+    ----------
+    frequency_Hz : numpy.ndarray
+        Stage-1 mesh frequencies (Hz), shape ``(n_f,)``; stage 2 meshes at ``p/q`` of them.
+    temperature_C : numpy.ndarray
+        Bulk temperatures (deg C), shape ``(n_t,)``.
+    frequency_ratio : numpy.ndarray
+        ``Lambda = 2 pi f / omega_n`` (-), shape ``(n_f,)``.
+    natural_frequency_Hz : float
+        ``omega_n / (2 pi)`` of stage 1 with the mean ``k_t`` (Hz), the frequency scale.
+    peak_dte_m : numpy.ndarray
+        Peak ``|DTE|`` over the recorded periods (m), shape ``(n_t, n_f, 2)``.
+    amplitude_m : numpy.ndarray
+        Half peak-to-peak DTE (m), same shape.
+    contact_loss, back_contact : numpy.ndarray of bool
+        Teeth separated inside the backlash / hit the back flank, same shape.
+    poincare_m : numpy.ndarray
+        DTE at the end of each recorded system period (m), shape ``(n_t, n_f, n_rec, 2)``.
+    mesh_ratio : tuple[int, int]
+        ``(p, q)``; a system period is ``q`` stage-1 mesh periods.
+    direction : {"up", "down"}
+        Sweep direction along frequency within a row.
+    continuation : bool
+        State carried from one frequency to the next (else each point from static).
+    """
+
+    frequency_Hz: np.ndarray
+    temperature_C: np.ndarray
+    frequency_ratio: np.ndarray
+    natural_frequency_Hz: float
+    peak_dte_m: np.ndarray
+    amplitude_m: np.ndarray
+    contact_loss: np.ndarray
+    back_contact: np.ndarray
+    poincare_m: np.ndarray
+    mesh_ratio: tuple[int, int]
+    direction: str
+    continuation: bool
+    setup: TwoStageThermalSetup = field(repr=False, default_factory=TwoStageThermalSetup)
+
+
+def _as_axis(name: str, v) -> np.ndarray:
+    a = np.atleast_1d(np.asarray(v, dtype=float))
+    if a.ndim != 1 or a.size == 0 or not np.all(np.isfinite(a)):
+        raise ModelError(f"`{name}` must be a non-empty 1-d array of finite numbers")
+    return a
+
+
+@dataclass(frozen=True)
+class _Grid:
+    Y0: np.ndarray
+    P: np.ndarray
+    T: np.ndarray
+    H: np.ndarray
+    order: np.ndarray
+    lam: np.ndarray
+    scales: dict
+    mesh_ratio: tuple[int, int]
+
+
+def _prepare_grid(
+    setup: TwoStageThermalSetup, f: np.ndarray, t: np.ndarray, n: int, direction: str
+) -> _Grid:
+    """Models at every grid point, as the kernels' arrays (static states, params, tables)."""
+    rows = [_models_at_temperature(setup, float(tc), f) for tc in t]
+    m0, sc0, _ = rows[0][0]
+    p, q = m0.mesh_ratio
+    Y0 = np.empty((t.size, f.size, 4))
+    P = np.empty((t.size, f.size, 9))
+    T = np.empty((t.size, f.size, 4, 2 * q * n))
+    for i, row in enumerate(rows):
+        for j, (model, _, _) in enumerate(row):
+            Y0[i, j] = static_state(model)
+            P[i, j] = model.params()
+            T[i, j] = model.tables(n)
+    lam = np.array([lam for _, _, lam in rows[0]])
+    order = np.arange(f.size) if direction == "up" else np.arange(f.size)[::-1].copy()
+    return _Grid(Y0, P, T, 2.0 * math.pi / (lam * n), order, lam, sc0, (int(p), int(q)))
+
+
+def peak_dte_map(
+    frequencies_Hz,
+    temperatures_C,
+    setup: TwoStageThermalSetup | None = None,
+    *,
+    transient_periods: int = 200,
+    record_periods: int = 20,
+    steps_per_period: int = 64,
+    direction: Literal["up", "down"] = "up",
+    continuation: bool = True,
+    parallel: bool = True,
+) -> PeakDTEMap:
+    """Peak DTE of both stages over mesh frequency x bulk temperature (module docstring).
+
+    Parameters
+    ----------
+    frequencies_Hz : array_like
+        Stage-1 mesh frequencies (Hz), > 0, swept in the given order (``"up"``) or reversed.
+    temperatures_C : array_like
+        Bulk temperatures (deg C), above ``setup.initial_temperature_C`` when thermal.
+    setup : TwoStageThermalSetup or None
+        Model inputs; None: the defaults.
+    transient_periods, record_periods : int
+        System periods dropped at each point, then recorded (the first point of a row
+        starts from the static state; with ``continuation`` the others from the previous
+        point's final state).
+    steps_per_period : int
+        RK4 steps per stage-1 mesh period.
+    direction : {"up", "down"}
+        Frequency sweep direction within each row.
+    continuation : bool
+        Carry the state along the row (hysteresis and coexisting branches show up).
+    parallel : bool
+        numba ``prange`` over the temperature rows; False: the same row function serially.
+
+    Returns
+    -------
+    PeakDTEMap
+    """
+    s = setup or TwoStageThermalSetup()
+    f = _as_axis("frequencies_Hz", frequencies_Hz)
+    t = _as_axis("temperatures_C", temperatures_C)
+    if np.any(f <= 0):
+        raise ModelError("`frequencies_Hz` must be > 0")
+    if direction not in ("up", "down"):
+        raise ModelError(f"`direction` must be 'up' or 'down', was {direction!r}")
+    n = int(steps_per_period)
+    if n < 4 or int(record_periods) < 1 or int(transient_periods) < 0:
+        raise ModelError("need steps_per_period >= 4, record_periods >= 1, transient >= 0")
+    grid = _prepare_grid(s, f, t, n, direction)
+    out = _alloc(grid.Y0, int(record_periods))
+    kernel = _map_parallel if parallel else _map_serial
+    kernel(
+        grid.Y0,
+        grid.P,
+        grid.T,
+        grid.H,
+        grid.order,
+        bool(continuation),
+        int(transient_periods),
+        int(record_periods),
+        *out,
+    )
+    p, q = grid.mesh_ratio
+    lam, sc0 = grid.lam, grid.scales
+    peak, amp, loss, back, poinc = out
+    L = sc0["L"]
+    return PeakDTEMap(
+        frequency_Hz=f,
+        temperature_C=t,
+        frequency_ratio=lam,
+        natural_frequency_Hz=sc0["omega_n"] / (2 * math.pi),
+        peak_dte_m=peak * L,
+        amplitude_m=amp * L,
+        contact_loss=loss,
+        back_contact=back,
+        poincare_m=poinc * L,
+        mesh_ratio=(int(p), int(q)),
+        direction=direction,
+        continuation=bool(continuation),
+        setup=s,
+    )
+
+
+# ----------------------------------------------------------------------------- bifurcation
+@dataclass(frozen=True)
+class Bifurcation:
+    """Poincare samples of the DTE over one control parameter (bifurcation diagram data).
+
+    Attributes
+    ----------
+    parameter : numpy.ndarray
+        Control parameter values, shape ``(n,)``, in ``parameter_unit``.
+    parameter_name, parameter_unit : str
+        ``"mesh frequency"``/``"Hz"`` or ``"bulk temperature"``/``"deg C"``.
+    fixed : float
+        The other parameter's value (deg C or Hz).
+    samples_m : numpy.ndarray
+        DTE at the end of each recorded system period (m), shape ``(n, n_rec, 2)``.
+    contact_loss, back_contact : numpy.ndarray of bool
+        Shape ``(n, 2)``.
+    direction : str
+        Sweep direction (frequency sweeps); ``"independent"`` for temperature sweeps.
+    """
+
+    parameter: np.ndarray
+    parameter_name: str
+    parameter_unit: str
+    fixed: float
+    samples_m: np.ndarray
+    contact_loss: np.ndarray
+    back_contact: np.ndarray
+    direction: str
+
+    def distinct_counts(self, rtol: float = 1e-6) -> np.ndarray:
+        """Distinct Poincare values per parameter and stage, shape ``(n, 2)`` (1: period 1).
+
+        Two samples count as one if they differ by less than ``rtol`` times the stage's
+        largest ``|DTE|`` sample.
+        """
+        out = np.empty(self.samples_m.shape[::2], dtype=int)
+        for st in range(2):
+            scale = max(float(np.max(np.abs(self.samples_m[..., st]))), 1e-300)
+            for i in range(self.samples_m.shape[0]):
+                v = np.sort(self.samples_m[i, :, st])
+                out[i, st] = 1 + int(np.sum(np.diff(v) > rtol * scale))
+        return out
+
+
+def bifurcation_over_frequency(
+    frequencies_Hz,
+    temperature_C: float,
+    setup: TwoStageThermalSetup | None = None,
+    *,
+    transient_periods: int = 300,
+    record_periods: int = 40,
+    steps_per_period: int = 64,
+    direction: Literal["up", "down"] = "up",
+) -> Bifurcation:
+    """Poincare samples over mesh frequency at one bulk temperature (state carried along)."""
+    m = peak_dte_map(
+        frequencies_Hz,
+        [temperature_C],
+        setup,
+        transient_periods=transient_periods,
+        record_periods=record_periods,
+        steps_per_period=steps_per_period,
+        direction=direction,
+        continuation=True,
+        parallel=False,
+    )
+    return Bifurcation(
+        m.frequency_Hz,
+        "mesh frequency",
+        "Hz",
+        float(temperature_C),
+        m.poincare_m[0],
+        m.contact_loss[0],
+        m.back_contact[0],
+        direction,
+    )
+
+
+def bifurcation_over_temperature(
+    frequency_Hz: float,
+    temperatures_C,
+    setup: TwoStageThermalSetup | None = None,
+    *,
+    transient_periods: int = 300,
+    record_periods: int = 40,
+    steps_per_period: int = 64,
+    parallel: bool = True,
+) -> Bifurcation:
+    """Poincare samples over bulk temperature at one mesh frequency.
+
+    Each temperature starts from its static state (temperatures are rows of the map, run in
+    parallel), so no hysteresis along temperature is followed.
+    """
+    m = peak_dte_map(
+        [frequency_Hz],
+        temperatures_C,
+        setup,
+        transient_periods=transient_periods,
+        record_periods=record_periods,
+        steps_per_period=steps_per_period,
+        continuation=False,
+        parallel=parallel,
+    )
+    return Bifurcation(
+        m.temperature_C,
+        "bulk temperature",
+        "deg C",
+        float(frequency_Hz),
+        m.poincare_m[:, 0],
+        m.contact_loss[:, 0],
+        m.back_contact[:, 0],
+        "independent",
+    )
