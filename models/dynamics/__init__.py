@@ -3,7 +3,13 @@
 * :mod:`models.dynamics.sdof`: the non-dimensional equation, dead-zone backlash, and the
   FVMS / VVMS / LSTE models built from a :func:`~models.stiffness.mesh_cycle.mesh_cycle`;
 * :mod:`models.dynamics.integrate`: fixed-step RK4 (numba, and a plain-Python reference);
-* :mod:`models.dynamics.sweep`: up/down frequency sweeps with Arms and contact flags;
+* :mod:`models.dynamics.sweep`: up/down frequency sweeps with Arms, contact flags and period
+  detection;
+* :mod:`models.dynamics.itms`: the ITMS model (seed 003 Eq. 28), one dead-zone spring per tooth
+  pair;
+* :mod:`models.dynamics.dimensional`: equivalent mass, omega_n, Lambda <-> Hz <-> rpm, DTE in um;
+* :mod:`models.dynamics.parallel`: :func:`sweep_many`, independent sweeps in parallel (numba
+  prange);
 * :mod:`models.dynamics.two_stage`: the two-stage torsional model of seed 001 (two relative
   DTE coordinates, coupled through the intermediate shaft), RK4 and steady response, and the
   seed's six-state system with a flexible intermediate shaft as a plain reference;
@@ -12,12 +18,34 @@
   bifurcation diagrams.
 """
 
-from models.dynamics.integrate import periods, periods_reference, periods_solve_ivp, settle
+from models.dynamics.dimensional import (
+    DimensionalScaling,
+    DimensionalSweep,
+    dimensional_scaling,
+    disc_inertia,
+    equivalent_mass,
+    to_dimensional,
+)
+from models.dynamics.integrate import (
+    MAX_PERIOD,
+    POINCARE_POINTS,
+    Settled,
+    periods,
+    periods_reference,
+    periods_solve_ivp,
+    settle,
+    settle_periodic,
+)
+from models.dynamics.itms import ITMSModel, itms_from_mesh_cycle
+from models.dynamics.parallel import SweepJob, sweep_many
 from models.dynamics.sdof import (
     MODELS,
+    DynamicModel,
+    PeriodicCurve,
     SDOFModel,
     dead_zone,
     dead_zone_potential,
+    fvms_error_curve,
     printed_contact_force,
     sdof_from_mesh_cycle,
 )
@@ -27,7 +55,6 @@ from models.dynamics.two_stage import (
     SixStateSystem,
     TwoStageModel,
     TwoStageResponse,
-    disc_inertia,
     rigid_shaft_model,
     six_state_from_gear_sets,
     six_state_reference,
@@ -50,12 +77,21 @@ from models.dynamics.two_stage_maps import (
 )
 
 __all__ = [
+    "MAX_PERIOD",
     "MODELS",
+    "POINCARE_POINTS",
     "Bifurcation",
+    "DimensionalScaling",
+    "DimensionalSweep",
+    "DynamicModel",
+    "ITMSModel",
     "MeshStage",
     "PeakDTEMap",
+    "PeriodicCurve",
     "SDOFModel",
+    "Settled",
     "SixStateSystem",
+    "SweepJob",
     "SweepResult",
     "ThermalStiffness",
     "TwoStageModel",
@@ -65,7 +101,11 @@ __all__ = [
     "bifurcation_over_temperature",
     "dead_zone",
     "dead_zone_potential",
+    "dimensional_scaling",
     "disc_inertia",
+    "equivalent_mass",
+    "fvms_error_curve",
+    "itms_from_mesh_cycle",
     "peak_dte_map",
     "periods",
     "periods_reference",
@@ -74,13 +114,16 @@ __all__ = [
     "rigid_shaft_model",
     "sdof_from_mesh_cycle",
     "settle",
+    "settle_periodic",
     "six_state_from_gear_sets",
     "six_state_reference",
     "static_state",
     "steady_state",
     "sweep",
+    "sweep_many",
     "sweep_up_down",
     "thermal_stiffness_component",
+    "to_dimensional",
     "two_stage_at_temperature",
     "two_stage_from_gear_sets",
     "two_stage_periods",

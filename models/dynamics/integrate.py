@@ -1,68 +1,171 @@
-r"""Fixed-step RK4 for the SDOF model, compiled (numba) and a pure-Python reference.
+r"""Fixed-step RK4 for the SDOF and ITMS models, compiled (numba) and a pure-Python reference.
 
 The step is a whole fraction of the mesh period, ``h = 2 pi / (Lambda N)``, and every period
-starts at cycle phase 0, so the periodic ``tilde k`` and ``tilde e`` are needed only at the
-``2 N`` half steps of one period (:meth:`~models.dynamics.sdof.SDOFModel.tables`); a step costs
-a few multiplications, no cosine. The classical RK4 stages are
+starts at cycle phase 0, so the periodic stiffness and error tables are needed only at the
+``2 N`` half steps of one period (:meth:`~models.dynamics.sdof.SDOFModel.pair_tables`); a step
+costs a few multiplications, no cosine. The classical RK4 stages are
 
 .. math:: k_1 = g(t, y),\ k_2 = g(t + h/2, y + h k_1/2),\ k_3 = g(t + h/2, y + h k_2/2),
           \ k_4 = g(t + h, y + h k_3),\ y \leftarrow y + h (k_1 + 2 k_2 + 2 k_3 + k_4) / 6
 
-with ``g`` the SDOF right-hand side (dead-zone backlash). The dead zone has a kink, so near
-contact loss the scheme is locally first order in the kink crossings; ``N = 128`` per mesh
-period keeps the Arms within 1 % of an adaptive RK45 at rtol 1e-9 (benchmark
-``tests/benchmarks/bench_sdof_sweep.py``). :func:`periods_reference` runs the same operations
-in the same order in plain Python; :func:`periods_solve_ivp` is the adaptive check.
+with ``g`` the right-hand side ``x'' = F - 2 zeta x' - sum_j [kd_j max(x - ed_j - b, 0) +
+kb_j min(x - eb_j + b, 0)]``: one tooth-pair column ``j`` per pair (ITMS, seed 003 Eq. 28), or
+a single column with ``kd = kb = k`` and ``ed = eb = e`` (FVMS / VVMS / LSTE, Eqs. 26, 30, 31),
+which is the dead zone ``k f(x - e)`` of :func:`~models.dynamics.sdof.dead_zone`.
+
+The dead zone has a kink, so near contact loss the scheme is locally first order in the kink
+crossings; ``N = 128`` per mesh period keeps the Arms within 1 % of an adaptive RK45 at rtol
+1e-9 (benchmark ``tests/benchmarks/bench_sdof_sweep.py``). :func:`periods_reference` runs the
+same operations in the same order in plain Python; :func:`periods_solve_ivp` is the adaptive
+check.
+
+Steady state (:func:`settle_periodic`): whole periods are run until the Poincare point (the
+state at phase 0) repeats with some period ``n`` in 1..8, i.e. ``max(|dx|, |dx'|)`` between
+the points ``n`` periods apart is below ``tol`` three times running; the smallest such ``n``
+is the period, provided (for ``n > 1``) the distances ``|P_k - P_(k-d)|`` for the divisors
+``d < n`` of ``n`` have stopped shrinking -- otherwise a period-``d`` response still
+converging, whose transient turns by about ``2 pi d / n`` per ``d`` periods, would pass for
+period ``n`` (the guard needs the transient to decay by more than 2 % per ``n`` periods,
+roughly ``zeta n / Lambda > 0.003``) -- and differ by more than ``100 tol`` (a period-``n``
+orbit split by less, just past a period doubling, runs to ``max_periods`` and is reported
+aperiodic: not resolved at that tolerance). A period-2 response therefore settles as quickly
+as a period-1 one; a quasi-periodic or chaotic response never does, runs ``max_periods`` and
+is reported with period 0 ("aperiodic").
+
+The compiled sweep kernel :func:`sweep_kernel` (used by :func:`models.dynamics.sweep.sweep`
+and, in parallel over sweeps, by :func:`models.dynamics.parallel.sweep_many`) does settle,
+record and the DFT of the first three mesh harmonics for a whole sweep in one call.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import Final
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
-from models.dynamics.sdof import SDOFModel
+from models.dynamics.sdof import DynamicModel
 
-__all__ = ["periods", "periods_reference", "periods_solve_ivp", "settle"]
+__all__ = [
+    "MAX_PERIOD",
+    "POINCARE_POINTS",
+    "Settled",
+    "TableSet",
+    "model_tables",
+    "periods",
+    "periods_reference",
+    "periods_solve_ivp",
+    "settle",
+    "settle_periodic",
+    "sweep_kernel",
+    "sweep_many_kernel",
+]
+
+#: Longest period (in mesh periods) that :func:`settle_periodic` recognises.
+MAX_PERIOD: Final = 8
+#: Poincare points kept per steady state (the last ones, in time order).
+POINCARE_POINTS: Final = 16
+_REPEATS: Final = 3
+_SPREAD_RATIO: Final = 0.98
+_MIN_SPLIT: Final = 100.0
+
+
+@dataclass(frozen=True)
+class TableSet:
+    """Everything the compiled kernels need from a model at ``N`` steps per period.
+
+    Attributes
+    ----------
+    kd, ed, kb, eb : numpy.ndarray
+        ``(2 N, P)`` drive-side stiffness and offset, back-side stiffness and offset at the
+        half steps (-), C-contiguous.
+    drive_offset, back_offset : numpy.ndarray
+        ``(2 N,)`` smallest ``ed`` over the pairs with ``kd > 0`` and largest ``eb`` over the
+        pairs with ``kb > 0`` (-): contact loss is ``x - drive_offset < b`` (no pair touches
+        on the drive side), back-side impact ``x - back_offset < -b``.
+    cos, sin : numpy.ndarray
+        ``(3, N)`` ``cos(2 pi k j / N)``, ``sin(...)``, ``k = 1..3``: the DFT of the mesh
+        harmonics.
+    steps_per_period : int
+    """
+
+    kd: np.ndarray
+    ed: np.ndarray
+    kb: np.ndarray
+    eb: np.ndarray
+    drive_offset: np.ndarray
+    back_offset: np.ndarray
+    cos: np.ndarray
+    sin: np.ndarray
+    steps_per_period: int
+
+
+def model_tables(model: DynamicModel, steps_per_period: int) -> TableSet:
+    """Tables of ``model`` at ``steps_per_period`` RK4 steps per mesh period (>= 4)."""
+    if int(steps_per_period) != steps_per_period or steps_per_period < 4:
+        raise ValueError(f"`steps_per_period` must be an integer >= 4, was {steps_per_period!r}")
+    n = int(steps_per_period)
+    kd, ed, kb, eb = (np.ascontiguousarray(a, dtype=float) for a in model.pair_tables(n))
+    if not (kd.shape == ed.shape == kb.shape == eb.shape and kd.shape[0] == 2 * n):
+        raise ValueError("`pair_tables` must return four (2 N, P) arrays")
+    with np.errstate(invalid="ignore"):
+        drive = np.where(kd > 0, ed, np.inf).min(axis=1)
+        back = np.where(kb > 0, eb, -np.inf).max(axis=1)
+    j = np.arange(n)
+    arg = 2 * np.pi * np.arange(1, 4)[:, None] * j[None, :] / n
+    return TableSet(
+        kd,
+        ed,
+        kb,
+        eb,
+        np.ascontiguousarray(drive),
+        np.ascontiguousarray(back),
+        np.ascontiguousarray(np.cos(arg)),
+        np.ascontiguousarray(np.sin(arg)),
+        n,
+    )
+
+
+# --- compiled kernels ---------------------------------------------------------------------------
+@njit(cache=True)
+def _accel(x, v, j, zeta, force, b, kd, ed, kb, eb):  # pragma: no cover - compiled
+    f = 0.0
+    for p in range(kd.shape[1]):
+        u = x - ed[j, p]
+        if u > b:
+            f += kd[j, p] * (u - b)
+        w = x - eb[j, p]
+        if w < -b:
+            f += kb[j, p] * (w + b)
+    return force - 2.0 * zeta * v - f
 
 
 @njit(cache=True)
-def _accel(x, v, k, e, zeta, force, b):  # pragma: no cover - compiled
-    u = x - e
-    if u > b:
-        f = u - b
-    elif u < -b:
-        f = u + b
-    else:
-        f = 0.0
-    return force - 2.0 * zeta * v - k * f
-
-
-@njit(cache=True)
-def _step(x, v, j, zeta, force, b, ktab, etab, h):  # pragma: no cover - compiled
-    n2 = ktab.size
+def _step(x, v, j, zeta, force, b, kd, ed, kb, eb, h):  # pragma: no cover - compiled
+    n2 = kd.shape[0]
     j0 = 2 * j
     j1 = j0 + 1
     j2 = (j0 + 2) % n2
-    a1 = _accel(x, v, ktab[j0], etab[j0], zeta, force, b)
+    a1 = _accel(x, v, j0, zeta, force, b, kd, ed, kb, eb)
     x2 = x + 0.5 * h * v
     v2 = v + 0.5 * h * a1
-    a2 = _accel(x2, v2, ktab[j1], etab[j1], zeta, force, b)
+    a2 = _accel(x2, v2, j1, zeta, force, b, kd, ed, kb, eb)
     x3 = x + 0.5 * h * v2
     v3 = v + 0.5 * h * a2
-    a3 = _accel(x3, v3, ktab[j1], etab[j1], zeta, force, b)
+    a3 = _accel(x3, v3, j1, zeta, force, b, kd, ed, kb, eb)
     x4 = x + h * v3
     v4 = v + h * a3
-    a4 = _accel(x4, v4, ktab[j2], etab[j2], zeta, force, b)
+    a4 = _accel(x4, v4, j2, zeta, force, b, kd, ed, kb, eb)
     xn = x + h / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4)
     vn = v + h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
     return xn, vn
 
 
 @njit(cache=True)
-def _periods(x, v, zeta, force, b, ktab, etab, h, n_periods, xs, us):  # pragma: no cover
-    n = ktab.size // 2
+def _periods(x, v, zeta, force, b, kd, ed, kb, eb, doff, h, n_periods, xs, us):  # pragma: no cover
+    n = kd.shape[0] // 2
     rec = xs.size > 0
     pts = np.empty((n_periods, 2))
     i = 0
@@ -70,8 +173,8 @@ def _periods(x, v, zeta, force, b, ktab, etab, h, n_periods, xs, us):  # pragma:
         for j in range(n):
             if rec:
                 xs[i] = x
-                us[i] = x - etab[2 * j]
-            x, v = _step(x, v, j, zeta, force, b, ktab, etab, h)
+                us[i] = x - doff[2 * j]
+            x, v = _step(x, v, j, zeta, force, b, kd, ed, kb, eb, h)
             i += 1
         pts[p, 0] = x
         pts[p, 1] = v
@@ -79,38 +182,291 @@ def _periods(x, v, zeta, force, b, ktab, etab, h, n_periods, xs, us):  # pragma:
 
 
 @njit(cache=True)
-def _settle(x, v, zeta, force, b, ktab, etab, h, tol, min_periods, max_periods):  # pragma: no cover
-    n = ktab.size // 2
+def _dist(ring, a, c):  # pragma: no cover - compiled
+    m = ring.shape[0]
+    a %= m
+    c %= m
+    return max(abs(ring[a, 0] - ring[c, 0]), abs(ring[a, 1] - ring[c, 1]))
+
+
+@njit(cache=True)
+def _period_of(ring, count, tol):  # pragma: no cover - compiled
+    """Smallest n in 1..MAX_PERIOD with the last 3 points n apart within tol, else 0.
+
+    For ``n > 1`` the distances ``|P_k - P_(k-d)|`` for the proper divisors ``d`` of ``n``
+    must also have stopped shrinking (each ``>= SPREAD_RATIO`` of its value ``n`` periods
+    earlier) and exceed ``MIN_SPLIT * tol``: a period-``d`` response still converging, with a
+    transient that turns by about ``2 pi d / n`` per ``d`` periods (or, near a flip
+    bifurcation, changes sign every period and decays slowly), passes the distance test for
+    ``n``, but its period-``d`` distances decay, or are tiny.
+    """
+    for n in range(1, MAX_PERIOD + 1):
+        if count - 2 * n - _REPEATS + 1 < 0:
+            return 0
+        ok = True
+        for i in range(_REPEATS):
+            a = count - i
+            if not _dist(ring, a, a - n) < tol:
+                ok = False
+                break
+            for d in range(1, n):
+                if n % d != 0:
+                    continue
+                split = _dist(ring, a, a - d)
+                if split < _MIN_SPLIT * tol or split < _SPREAD_RATIO * _dist(
+                    ring, a - n, a - n - d
+                ):
+                    ok = False
+                    break
+            if not ok:
+                break
+        if ok:
+            return n
+    return 0
+
+
+@njit(cache=True)
+def _settle(
+    x, v, zeta, force, b, kd, ed, kb, eb, h, tol, min_periods, max_periods, ring
+):  # pragma: no cover - compiled
+    """Run periods until period-n repetition; ``ring`` holds Poincare points by count mod m."""
+    n = kd.shape[0] // 2
+    m = ring.shape[0]
+    for i in range(m):
+        ring[i, 0] = np.nan
+        ring[i, 1] = np.nan
+    ring[0, 0] = x
+    ring[0, 1] = v
     count = 0
-    streak = 0
-    converged = False
+    period = 0
     while count < max_periods:
-        px = x
-        pv = v
         for j in range(n):
-            x, v = _step(x, v, j, zeta, force, b, ktab, etab, h)
+            x, v = _step(x, v, j, zeta, force, b, kd, ed, kb, eb, h)
         count += 1
-        d = max(abs(x - px), abs(v - pv))
-        if d < tol:
-            streak += 1
-        else:
-            streak = 0
-        if count >= min_periods and streak >= 3:
-            converged = True
-            break
-    return x, v, count, converged
+        ring[count % m, 0] = x
+        ring[count % m, 1] = v
+        if count >= min_periods:
+            period = _period_of(ring, count, tol)
+            if period > 0:
+                break
+    return x, v, count, period
 
 
-def _setup(model: SDOFModel, frequency: float, steps_per_period: int):
-    if not frequency > 0 or steps_per_period < 4:
-        raise ValueError("need frequency > 0 and steps_per_period >= 4")
-    ktab, etab = model.tables(frequency, steps_per_period)
-    h = 2.0 * math.pi / (frequency * steps_per_period)
-    return ktab, etab, h
+@njit(cache=True)
+def _steady(
+    x,
+    v,
+    zeta,
+    force,
+    b,
+    kd,
+    ed,
+    kb,
+    eb,
+    doff,
+    boff,
+    cs,
+    sn,
+    h,
+    tol,
+    min_periods,
+    max_periods,
+    record_periods,
+    ring,
+    poinc,
+    amps,
+):  # pragma: no cover - compiled
+    """Settle, then record; fills ``poinc`` (POINCARE_POINTS, 2) and ``amps`` (3,)."""
+    n = kd.shape[0] // 2
+    m = ring.shape[0]
+    x, v, count, period = _settle(
+        x, v, zeta, force, b, kd, ed, kb, eb, h, tol, min_periods, max_periods, ring
+    )
+    rec = record_periods
+    if period > 0 and rec % period != 0:
+        rec = (rec // period + 1) * period
+    c1 = 0.0
+    c2 = 0.0
+    c3 = 0.0
+    s1 = 0.0
+    s2 = 0.0
+    s3 = 0.0
+    total = 0.0
+    loss = False
+    impact = False
+    for _ in range(rec):
+        for j in range(n):
+            total += x
+            c1 += x * cs[0, j]
+            c2 += x * cs[1, j]
+            c3 += x * cs[2, j]
+            s1 += x * sn[0, j]
+            s2 += x * sn[1, j]
+            s3 += x * sn[2, j]
+            if x - doff[2 * j] < b:
+                loss = True
+            if x - boff[2 * j] < -b:
+                impact = True
+            x, v = _step(x, v, j, zeta, force, b, kd, ed, kb, eb, h)
+        count += 1
+        ring[count % m, 0] = x
+        ring[count % m, 1] = v
+    size = rec * n
+    amps[0] = 2.0 * math.sqrt(c1 * c1 + s1 * s1) / size
+    amps[1] = 2.0 * math.sqrt(c2 * c2 + s2 * s2) / size
+    amps[2] = 2.0 * math.sqrt(c3 * c3 + s3 * s3) / size
+    for i in range(m):  # oldest first
+        k = (count + 1 + i) % m
+        poinc[i, 0] = ring[k, 0]
+        poinc[i, 1] = ring[k, 1]
+    return x, v, count - rec, period, total / size, loss, impact
+
+
+@njit(cache=True)
+def sweep_kernel(
+    x,
+    v,
+    zeta,
+    force,
+    b,
+    kd,
+    ed,
+    kb,
+    eb,
+    doff,
+    boff,
+    cs,
+    sn,
+    freqs,
+    tol,
+    min_periods,
+    max_periods,
+    record_periods,
+    amps,
+    mean,
+    loss,
+    impact,
+    periods_run,
+    period,
+    poinc,
+    entry,
+):  # pragma: no cover - compiled
+    """One sweep in the order of ``freqs``, carrying the state; fills the output arrays.
+
+    Outputs (first axis the sweep point): ``amps (M, 3)``, ``mean (M,)``, ``loss``/``impact``
+    ``(M,)`` bool, ``periods_run``/``period`` ``(M,)`` int, ``poinc (M, POINCARE_POINTS, 2)``,
+    ``entry (M, 2)`` the state each point started from. Returns the final state.
+    """
+    n = kd.shape[0] // 2
+    ring = np.empty((POINCARE_POINTS, 2))
+    for i in range(freqs.size):
+        entry[i, 0] = x
+        entry[i, 1] = v
+        h = 2.0 * math.pi / (freqs[i] * n)
+        x, v, cnt, per, mu, lo, im = _steady(
+            x,
+            v,
+            zeta,
+            force,
+            b,
+            kd,
+            ed,
+            kb,
+            eb,
+            doff,
+            boff,
+            cs,
+            sn,
+            h,
+            tol,
+            min_periods,
+            max_periods,
+            record_periods,
+            ring,
+            poinc[i],
+            amps[i],
+        )
+        mean[i] = mu
+        loss[i] = lo
+        impact[i] = im
+        periods_run[i] = cnt
+        period[i] = per
+    return x, v
+
+
+@njit(parallel=True, cache=True)
+def sweep_many_kernel(
+    x0,
+    v0,
+    zeta,
+    force,
+    b,
+    kd,
+    ed,
+    kb,
+    eb,
+    doff,
+    boff,
+    cs,
+    sn,
+    freqs,
+    tol,
+    min_periods,
+    max_periods,
+    record_periods,
+    amps,
+    mean,
+    loss,
+    impact,
+    periods_run,
+    period,
+    poinc,
+    entry,
+):  # pragma: no cover - compiled
+    """:func:`sweep_kernel` for independent sweeps, in parallel over them (``numba.prange``).
+
+    Every array but ``cs``, ``sn`` has the sweep index first; the scalars are shared.
+    """
+    for s in prange(freqs.shape[0]):
+        sweep_kernel(
+            x0[s],
+            v0[s],
+            zeta[s],
+            force[s],
+            b[s],
+            kd[s],
+            ed[s],
+            kb[s],
+            eb[s],
+            doff[s],
+            boff[s],
+            cs,
+            sn,
+            freqs[s],
+            tol,
+            min_periods,
+            max_periods,
+            record_periods,
+            amps[s],
+            mean[s],
+            loss[s],
+            impact[s],
+            periods_run[s],
+            period[s],
+            poinc[s],
+            entry[s],
+        )
+
+
+# --- Python entry points -----------------------------------------------------------------------
+def _step_size(frequency: float, steps_per_period: int) -> float:
+    if not (math.isfinite(frequency) and frequency > 0):
+        raise ValueError(f"`frequency` must be finite and > 0, was {frequency!r}")
+    return 2.0 * math.pi / (frequency * steps_per_period)
 
 
 def periods(
-    model: SDOFModel,
+    model: DynamicModel,
     frequency: float,
     y0: tuple[float, float],
     n_periods: int,
@@ -122,9 +478,11 @@ def periods(
 
     Returns the Poincare points ``(n_periods, 2)`` (state ``(x, x')`` at the end of each
     period) and, with ``record``, ``x`` and ``u = x - e`` at every step start
-    (``n_periods * steps_per_period`` samples, whole periods).
+    (``n_periods * steps_per_period`` samples, whole periods; for the ITMS model ``e`` is the
+    smallest drive-side offset of the pairs, so ``u < b`` means that no pair touches).
     """
-    ktab, etab, h = _setup(model, frequency, steps_per_period)
+    t = model_tables(model, steps_per_period)
+    h = _step_size(frequency, t.steps_per_period)
     size = n_periods * steps_per_period if record else 0
     xs, us = np.empty(size), np.empty(size)
     pts = _periods(
@@ -133,8 +491,11 @@ def periods(
         model.zeta,
         model.force,
         model.backlash,
-        ktab,
-        etab,
+        t.kd,
+        t.ed,
+        t.kb,
+        t.eb,
+        t.drive_offset,
         h,
         int(n_periods),
         xs,
@@ -143,8 +504,87 @@ def periods(
     return pts, (xs if record else None), (us if record else None)
 
 
+@dataclass(frozen=True)
+class Settled:
+    """Outcome of :func:`settle_periodic`.
+
+    Attributes
+    ----------
+    state : tuple of float
+        ``(x, x')`` at phase 0 after the last period run (units of ``L``).
+    periods_run : int
+        Mesh periods run.
+    period : int
+        Detected period in mesh periods (1..8), 0 when none was found (aperiodic:
+        quasi-periodic or chaotic, or not yet settled at ``max_periods``).
+    poincare : numpy.ndarray
+        ``(k, 2)`` the last ``k = min(POINCARE_POINTS, periods_run + 1)`` Poincare points,
+        oldest first.
+    """
+
+    state: tuple[float, float]
+    periods_run: int
+    period: int
+    poincare: np.ndarray
+
+    @property
+    def converged(self) -> bool:
+        """Whether a period 1..8 was detected."""
+        return self.period > 0
+
+
+def _check_settle_args(tol: float, min_periods: int, max_periods: int) -> None:
+    if not tol >= 0:
+        raise ValueError(f"`tol` must be >= 0, was {tol!r}")
+    if not 0 <= min_periods <= max_periods:
+        raise ValueError(
+            f"need 0 <= `min_periods` <= `max_periods`, were {min_periods!r}, {max_periods!r}"
+        )
+
+
+def settle_periodic(
+    model: DynamicModel,
+    frequency: float,
+    y0: tuple[float, float],
+    *,
+    steps_per_period: int = 128,
+    tol: float = 1e-6,
+    min_periods: int = 10,
+    max_periods: int = 1000,
+) -> Settled:
+    """Run whole periods until the Poincare point repeats with a period ``n <= 8``.
+
+    ``max(|dx|, |dx'|)`` (units of ``L``) between the Poincare points ``n`` periods apart below
+    ``tol`` for three consecutive periods; the smallest such ``n`` is the period. At least
+    ``min_periods``, at most ``max_periods`` periods.
+    """
+    _check_settle_args(tol, min_periods, max_periods)
+    t = model_tables(model, steps_per_period)
+    h = _step_size(frequency, t.steps_per_period)
+    ring = np.empty((POINCARE_POINTS, 2))
+    x, v, n, per = _settle(
+        float(y0[0]),
+        float(y0[1]),
+        model.zeta,
+        model.force,
+        model.backlash,
+        t.kd,
+        t.ed,
+        t.kb,
+        t.eb,
+        h,
+        float(tol),
+        int(min_periods),
+        int(max_periods),
+        ring,
+    )
+    k = min(POINCARE_POINTS, int(n) + 1)
+    idx = (np.arange(int(n) - k + 1, int(n) + 1)) % POINCARE_POINTS
+    return Settled((float(x), float(v)), int(n), int(per), ring[idx].copy())
+
+
 def settle(
-    model: SDOFModel,
+    model: DynamicModel,
     frequency: float,
     y0: tuple[float, float],
     *,
@@ -153,31 +593,24 @@ def settle(
     min_periods: int = 10,
     max_periods: int = 1000,
 ) -> tuple[tuple[float, float], int, bool]:
-    """Run whole periods until the Poincare point moves less than ``tol`` for 3 periods running.
+    """:func:`settle_periodic` as ``(state, periods run, converged)``.
 
-    ``max(|dx|, |dx'|)`` between successive periods (units of ``L``), at least
-    ``min_periods``, at most ``max_periods``. Returns the state, the periods run and whether
-    it converged (a period-n or chaotic response never does and stops at the cap).
+    Converged means a period 1..8 was detected (a period-2 response converges as well).
     """
-    ktab, etab, h = _setup(model, frequency, steps_per_period)
-    x, v, n, ok = _settle(
-        float(y0[0]),
-        float(y0[1]),
-        model.zeta,
-        model.force,
-        model.backlash,
-        ktab,
-        etab,
-        h,
-        float(tol),
-        int(min_periods),
-        int(max_periods),
+    s = settle_periodic(
+        model,
+        frequency,
+        y0,
+        steps_per_period=steps_per_period,
+        tol=tol,
+        min_periods=min_periods,
+        max_periods=max_periods,
     )
-    return (x, v), int(n), bool(ok)
+    return s.state, s.periods_run, s.converged
 
 
 def periods_reference(
-    model: SDOFModel,
+    model: DynamicModel,
     frequency: float,
     y0: tuple[float, float],
     n_periods: int,
@@ -185,31 +618,38 @@ def periods_reference(
     steps_per_period: int = 128,
 ) -> np.ndarray:
     """Same scheme, same operation order, plain Python: Poincare points ``(n_periods, 2)``."""
-    ktab, etab, h = _setup(model, frequency, steps_per_period)
+    t = model_tables(model, steps_per_period)
+    h = _step_size(frequency, t.steps_per_period)
     zeta, force, b = model.zeta, model.force, model.backlash
-    kt, et = ktab.tolist(), etab.tolist()
-    n2 = len(kt)
+    kd, ed, kb, eb = (a.tolist() for a in (t.kd, t.ed, t.kb, t.eb))
+    n2 = len(kd)
 
-    def accel(x, v, k, e):
-        u = x - e
-        f = u - b if u > b else (u + b if u < -b else 0.0)
-        return force - 2.0 * zeta * v - k * f
+    def accel(x: float, v: float, j: int) -> float:
+        f = 0.0
+        for p in range(len(kd[j])):
+            u = x - ed[j][p]
+            if u > b:
+                f += kd[j][p] * (u - b)
+            w = x - eb[j][p]
+            if w < -b:
+                f += kb[j][p] * (w + b)
+        return force - 2.0 * zeta * v - f
 
     x, v = float(y0[0]), float(y0[1])
     pts = np.empty((n_periods, 2))
     for p in range(n_periods):
         for j in range(steps_per_period):
             j0, j1, j2 = 2 * j, 2 * j + 1, (2 * j + 2) % n2
-            a1 = accel(x, v, kt[j0], et[j0])
+            a1 = accel(x, v, j0)
             x2 = x + 0.5 * h * v
             v2 = v + 0.5 * h * a1
-            a2 = accel(x2, v2, kt[j1], et[j1])
+            a2 = accel(x2, v2, j1)
             x3 = x + 0.5 * h * v2
             v3 = v + 0.5 * h * a2
-            a3 = accel(x3, v3, kt[j1], et[j1])
+            a3 = accel(x3, v3, j1)
             x4 = x + h * v3
             v4 = v + h * a3
-            a4 = accel(x4, v4, kt[j2], et[j2])
+            a4 = accel(x4, v4, j2)
             x, v = (
                 x + h / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4),
                 v + h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
@@ -219,7 +659,7 @@ def periods_reference(
 
 
 def periods_solve_ivp(
-    model: SDOFModel,
+    model: DynamicModel,
     frequency: float,
     y0: tuple[float, float],
     n_periods: int,
@@ -230,8 +670,10 @@ def periods_solve_ivp(
 ):
     """Adaptive RK45 check (``scipy.integrate.solve_ivp``): Poincare points ``(n_periods, 2)``.
 
-    With ``record_points > 0``, also ``x`` at that many equally spaced points per period
-    (dense output), as the second return value.
+    The right-hand side is the model's continuous-time one (:meth:`rhs`: Fourier series, or
+    periodic interpolation of curves), independent of the RK4 tables. With
+    ``record_points > 0``, also ``x`` at that many equally spaced points per period (dense
+    output), as the second return value.
     """
     from scipy.integrate import solve_ivp
 

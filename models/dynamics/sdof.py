@@ -33,7 +33,14 @@ The three models of the seed (:func:`sdof_from_mesh_cycle`):
 * ``"lste"`` (Eq. 31): constant stiffness ``k_0 = F / mean(x_s)`` and the alternating part of
   the LSTE as the excitation, so that the quasi-static solution is ``x - b = x_s(t)``
   exactly (Eq. 31 as printed has no mean load; with it the model keeps the static
-  equilibrium).
+  equilibrium);
+* ``"itms"`` (Eq. 28): one stiffness and one error per tooth pair
+  (:mod:`models.dynamics.itms`), partial contact loss and corner contact included.
+
+Stiffness and error come either from their Fourier series (``source="fourier"``, seed
+Eq. 25, the cycle's ``*_harmonics``) or from the mesh-cycle curves themselves
+(``source="curve"``: periodic linear interpolation of the cycle's arrays, every harmonic
+kept; :class:`PeriodicCurve`).
 
 References
 ----------
@@ -46,6 +53,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Literal, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -55,14 +63,113 @@ from models.stiffness.mesh_cycle import Harmonics, MeshCycle
 
 __all__ = [
     "MODELS",
+    "DynamicModel",
+    "PeriodicCurve",
     "SDOFModel",
     "dead_zone",
     "dead_zone_potential",
+    "fvms_error_curve",
     "printed_contact_force",
     "sdof_from_mesh_cycle",
 ]
 
-MODELS = ("fvms", "vvms", "lste")
+MODELS = ("fvms", "vvms", "lste", "itms")
+
+
+class DynamicModel(Protocol):
+    """What the integrators and sweeps need from a model (SDOF or ITMS).
+
+    ``pair_tables(N)`` returns ``(kd, ed, kb, eb)``, each ``(2 N, P)``: drive-side stiffness and
+    offset, back-side stiffness and offset of ``P`` tooth-pair columns at the ``2 N`` half
+    steps of one mesh period (-); the contact force is
+    ``sum_j kd_j max(x - ed_j - b, 0) + kb_j min(x - eb_j + b, 0)``.
+    """
+
+    @property
+    def zeta(self) -> float:
+        """Damping ratio (-)."""
+        ...
+
+    @property
+    def force(self) -> float:
+        """``tilde F`` (-)."""
+        ...
+
+    @property
+    def backlash(self) -> float:
+        """``tilde b`` (-)."""
+        ...
+
+    @property
+    def length_scale_m(self) -> float:
+        """``L`` (m)."""
+        ...
+
+    @property
+    def mean_stiffness_N_m(self) -> float:  # noqa: N802 (unit in the name)
+        """``k_0`` (N/m)."""
+        ...
+
+    @property
+    def kind(self) -> str:
+        """Model name."""
+        ...
+
+    def pair_tables(
+        self, steps_per_period: int
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(kd, ed, kb, eb)`` at the ``2 N`` half steps, each ``(2 N, P)``."""
+        ...
+
+    def rhs(self, tau: float, y: np.ndarray, frequency: float) -> np.ndarray:
+        """``(x', v')`` at continuous time ``tau`` (for ``scipy.integrate.solve_ivp``)."""
+        ...
+
+    def start_dte(self) -> float:
+        """DTE to start a sweep from (units of ``L``), at rest."""
+        ...
+
+
+@dataclass(frozen=True)
+class PeriodicCurve:
+    """A curve over one mesh cycle, sampled at ``n`` uniform phases and interpolated linearly.
+
+    The alternative to :class:`~models.stiffness.mesh_cycle.Harmonics` (same call signature)
+    when every harmonic of a mesh-cycle curve is wanted (e.g. the FVMS steps at the
+    single/double contact transitions).
+
+    Attributes
+    ----------
+    values : numpy.ndarray
+        Samples at phases ``i / n``, ``i = 0..n-1`` (unit of the curve).
+    """
+
+    values: np.ndarray
+
+    def __post_init__(self) -> None:
+        v = np.asarray(self.values, dtype=float)
+        if v.ndim != 1 or v.size < 2 or not np.all(np.isfinite(v)):
+            raise ModelError("`values` must be a 1-D finite array of >= 2 samples")
+
+    @property
+    def mean(self) -> float:
+        """Mean over the cycle (trapezoid rule of the periodic interpolant = sample mean)."""
+        return float(np.mean(self.values))
+
+    def __call__(self, phase: ArrayLike) -> np.ndarray:
+        """Evaluate at cycle phases ``tau`` (-), periodic with period 1."""
+        v = np.asarray(self.values, dtype=float)
+        n = v.size
+        t = np.mod(np.asarray(phase, dtype=float), 1.0) * n
+        return np.asarray(np.interp(t, np.arange(n + 1), np.append(v, v[0])))
+
+    def scaled(self, scale: float, drop_mean: bool = False) -> PeriodicCurve:
+        """``(values - [mean]) / scale``."""
+        v = np.asarray(self.values, dtype=float)
+        return PeriodicCurve((v - (v.mean() if drop_mean else 0.0)) / scale)
+
+
+Series = Harmonics | PeriodicCurve
 
 
 def dead_zone(u: ArrayLike, b: float) -> np.ndarray:
@@ -102,9 +209,9 @@ class SDOFModel:
         ``tilde F = f_0 / (k_0 L)`` (-).
     backlash : float
         Half gap ``tilde b = b / L`` (-), >= 0; 0 gives a linear spring.
-    stiffness : Harmonics
+    stiffness : Harmonics or PeriodicCurve
         ``tilde k`` over the mesh cycle phase (-), mean 1 by construction.
-    error : Harmonics
+    error : Harmonics or PeriodicCurve
         ``tilde e`` over the mesh cycle phase (-).
     length_scale_m : float
         ``L`` (m): dimensional DTE is ``L x``.
@@ -117,8 +224,8 @@ class SDOFModel:
     zeta: float
     force: float
     backlash: float
-    stiffness: Harmonics = field(default_factory=lambda: Harmonics(1.0, np.zeros(0), np.zeros(0)))
-    error: Harmonics = field(default_factory=_zero_series)
+    stiffness: Series = field(default_factory=lambda: Harmonics(1.0, np.zeros(0), np.zeros(0)))
+    error: Series = field(default_factory=_zero_series)
     length_scale_m: float = 1.0
     mean_stiffness_N_m: float = math.nan
     kind: str = "custom"
@@ -141,6 +248,17 @@ class SDOFModel:
             np.ascontiguousarray(self.error(phase), dtype=float),
         )
 
+    def pair_tables(
+        self, steps_per_period: int
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The :class:`DynamicModel` tables: one column, ``kd = kb = k``, ``ed = eb = e``."""
+        k, e = self.tables(1.0, steps_per_period)
+        return k[:, None], e[:, None], k[:, None], e[:, None]
+
+    def start_dte(self) -> float:
+        """Quasi-static DTE at phase 0 ignoring the stiffness variation: ``b + F + e_0``."""
+        return self.static_dte() + self.error.mean
+
     def rhs(self, tau: float, y: np.ndarray, frequency: float) -> np.ndarray:
         """Right-hand side ``(x', v')`` at continuous time (for ``scipy.integrate.solve_ivp``)."""
         phase = frequency * tau / (2 * math.pi)
@@ -156,12 +274,59 @@ class SDOFModel:
         return self.backlash + self.force
 
 
-def _scaled(h: Harmonics, scale: float, drop_mean: bool = False) -> Harmonics:
+def _scaled(h: Series, scale: float, drop_mean: bool = False) -> Series:
+    if isinstance(h, PeriodicCurve):
+        return h.scaled(scale, drop_mean)
     return Harmonics(
         0.0 if drop_mean else h.mean / scale,
         np.asarray(h.amplitude) / scale,
         np.asarray(h.phase_rad),
     )
+
+
+def fvms_error_curve(cycle: MeshCycle) -> np.ndarray:
+    r"""The FVMS model's gear error from the cycle's per-pair profile errors (m), per phase.
+
+    .. math:: e_F(\tau) = \sum_{A \le s_i \le E} K_i e_i \Big/ \sum_{A \le s_i \le E} K_i
+
+    the stiffness-weighted error of the pairs on the theoretical path: with it
+    ``k_F (x - e_F) = sum_i K_i (x - e_i)``, the ITMS force (Eq. 28) while every pair on AE
+    touches. It is the static transmission error of the classical model (no corner contact,
+    no partial loss) less ``F / k_F``, so the quasi-static FVMS solution is that LSTE.
+    """
+    k = np.where(_in_path(cycle), 1.0 / cycle.compliance_m_N, 0.0)
+    return np.asarray((k * cycle.error_m).sum(axis=1) / k.sum(axis=1))
+
+
+def _in_path(cycle: MeshCycle) -> np.ndarray:
+    """Pairs on the theoretical path AE: zero separation distance (checked against the FVMS)."""
+    on = cycle.separation_m == 0.0
+    k = 1.0 / cycle.compliance_m_N
+    if not np.allclose(np.where(on, k, 0.0).sum(axis=1), cycle.fvms_N_m, rtol=1e-9):
+        raise ModelError("cannot identify the pairs on the theoretical path of `cycle`")
+    return np.asarray(on)
+
+
+def _series(cycle: MeshCycle, name: str, source: str, n: int | None) -> Series:
+    if source == "curve":
+        return PeriodicCurve(
+            np.asarray(
+                getattr(cycle, {"fvms": "fvms_N_m", "vvms": "vvms_N_m", "lste": "lste_m"}[name]),
+                dtype=float,
+            )
+        )
+    h: Harmonics = getattr(cycle, f"{name}_harmonics")
+    return h if n is None else Harmonics(h.mean, h.amplitude[:n], h.phase_rad[:n])
+
+
+def _error_series(cycle: MeshCycle, source: str, n: int | None) -> Series:
+    e = fvms_error_curve(cycle)
+    if source == "curve":
+        return PeriodicCurve(e)
+    c = np.fft.rfft(e) / e.size
+    nh = cycle.fvms_harmonics.amplitude.size if n is None else n
+    k = slice(1, nh + 1)
+    return Harmonics(float(c[0].real), 2 * np.abs(c[k]), np.angle(c[k]))
 
 
 def sdof_from_mesh_cycle(
@@ -170,50 +335,74 @@ def sdof_from_mesh_cycle(
     *,
     zeta: float,
     backlash_m: float,
-    error: Harmonics | None = None,
+    error: Harmonics | PeriodicCurve | Literal["cycle"] | None = None,
     length_scale_m: float | None = None,
     n_harmonics: int | None = None,
+    source: Literal["fourier", "curve"] = "fourier",
 ) -> SDOFModel:
-    """The seed's FVMS, VVMS or LSTE model from a :func:`~models.stiffness.mesh_cycle.mesh_cycle`.
+    """The seed's FVMS, VVMS, LSTE or ITMS model from a mesh cycle.
+
+    The cycle comes from :func:`~models.stiffness.mesh_cycle.mesh_cycle`.
 
     Parameters
     ----------
     cycle : MeshCycle
         Mesh cycle at the operating torque (its ``load_N`` is ``f_0``).
-    kind : {"fvms", "vvms", "lste"}
+    kind : {"fvms", "vvms", "lste", "itms"}
+        ``"itms"`` returns an :class:`~models.dynamics.itms.ITMSModel` (per-pair curves;
+        ``error``, ``n_harmonics`` and ``source`` do not apply).
     zeta : float
         Damping ratio.
     backlash_m : float
         Half backlash ``b`` on the line of action (m) (Table 3 gives ``2 b``).
-    error : Harmonics, optional
-        Gear error ``e(t)`` (m) for the FVMS model; ignored by the others.
+    error : Harmonics, PeriodicCurve or "cycle", optional
+        Gear error ``e(t)`` (m) for the FVMS model; ignored by the others. ``"cycle"``: the
+        cycle's own profile errors (tip relief) as :func:`fvms_error_curve`. None: no error.
     length_scale_m : float, optional
         ``L``; default ``b`` (then ``tilde b = 1``).
     n_harmonics : int, optional
-        Truncate the series to this many harmonics (default: all of the cycle's).
+        Truncate the Fourier series to this many harmonics (default: all of the cycle's).
+    source : {"fourier", "curve"}
+        Fourier series of the cycle (seed Eq. 25) or the sampled curves.
     """
     if kind not in MODELS:
         raise ModelError(f"unknown SDOF model {kind!r}; expected one of {MODELS}")
+    if source not in ("fourier", "curve"):
+        raise ModelError(f"`source` must be 'fourier' or 'curve', was {source!r}")
+    if kind == "itms":
+        from models.dynamics.itms import itms_from_mesh_cycle
+
+        return itms_from_mesh_cycle(  # type: ignore[return-value]
+            cycle, zeta=zeta, backlash_m=backlash_m, length_scale_m=length_scale_m
+        )
     L = backlash_m if length_scale_m is None else length_scale_m
     if not L > 0:
         raise ModelError("length scale must be > 0 (give length_scale_m when backlash is 0)")
     F = cycle.load_N
     n = n_harmonics
 
-    def cut(h: Harmonics) -> Harmonics:
-        return h if n is None else Harmonics(h.mean, h.amplitude[:n], h.phase_rad[:n])
+    def cut(h: Series) -> Series:
+        if n is None or isinstance(h, PeriodicCurve):
+            return h
+        return Harmonics(h.mean, h.amplitude[:n], h.phase_rad[:n])
 
-    err = _zero_series()
+    err: Series = _zero_series()
     if kind == "fvms":
-        h = cut(cycle.fvms_harmonics)
+        h = _series(cycle, "fvms", source, n)
         k0 = h.mean
-        if error is not None:
+        if isinstance(error, str):
+            if error != "cycle":
+                raise ModelError(
+                    f"`error` must be Harmonics, PeriodicCurve, 'cycle' or None, was {error!r}"
+                )
+            err = _scaled(_error_series(cycle, source, n), L)
+        elif error is not None:
             err = _scaled(cut(error), L)
     elif kind == "vvms":
-        h = cut(cycle.vvms_harmonics)
+        h = _series(cycle, "vvms", source, n)
         k0 = h.mean
     else:
-        hx = cut(cycle.lste_harmonics)
+        hx = _series(cycle, "lste", source, n)
         if not hx.mean > 0:
             raise ModelError("LSTE model needs a positive mean LSTE (torque > 0)")
         k0 = F / hx.mean

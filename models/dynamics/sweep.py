@@ -1,32 +1,39 @@
-r"""Frequency sweeps of the SDOF model: steady state, Arms, contact loss (seed 003 Secs. 4-5).
+r"""Frequency sweeps of the SDOF and ITMS models: steady state, Arms, contact loss, period.
 
-The sweep runs the frequencies in the given order (up or down) and **carries the state**
-from one frequency to the next, so a branch is followed until it disappears and the jumps
-and the hysteresis of the softening primary resonance appear. At each frequency:
+Seed 003 Secs. 4-5. The sweep runs the frequencies in the given order (up or down) and
+**carries the state** from one frequency to the next, so a branch is followed until it
+disappears and the jumps and the hysteresis of the softening primary resonance appear. At
+each frequency (all in one compiled call, :func:`~models.dynamics.integrate.sweep_kernel`):
 
-1. transients are discarded by :func:`~models.dynamics.integrate.settle`: whole mesh periods
-   until the Poincare point (state at phase 0) moves less than ``tol`` for three periods
-   running, at least ``min_periods``, at most ``max_periods`` (``converged`` says which);
-2. ``record_periods`` whole periods are recorded (``steps_per_period`` samples each) and
-   the DTE amplitudes ``A_1..A_3`` of mesh harmonics 1-3 taken from their FFT (bin
-   ``k * record_periods``; whole periods, so no leakage), and
+1. transients are discarded by the convergence test of
+   :func:`~models.dynamics.integrate.settle_periodic`: whole mesh periods until the Poincare
+   point (state at phase 0) repeats with a period ``n`` in 1..8 to within ``tol`` for three
+   periods running, at least ``min_periods``, at most ``max_periods``; ``period`` is ``n``,
+   or 0 ("aperiodic": quasi-periodic, chaotic, or not settled within ``max_periods``);
+2. ``record_periods`` whole periods are recorded (rounded up to a multiple of ``n``, so the
+   record holds whole response periods), ``steps_per_period`` samples each, and the DTE
+   amplitudes ``A_1..A_3`` of mesh harmonics 1-3 taken from their DFT (bin
+   ``k * record_periods``; whole periods, no leakage), and
 
    .. math:: A_{rms} = \sqrt{A_1^2 + A_2^2 + A_3^2}
 
    (SEED-NOTES 17: the seed prints sqrt(sum A_i));
-3. flags: **contact loss** if ``u = x - e`` enters the gap (``u < b``) at a sample, **back-side
-   impact** if it reaches the back flank (``u < -b``).
+3. flags: **contact loss** if no pair touches on the drive side at a sample (``u = x - e < b``;
+   ITMS: ``e`` the smallest drive-side gap of the pairs), **back-side impact** if the back
+   flank is reached (``u < -b``);
+4. the last :data:`~models.dynamics.integrate.POINCARE_POINTS` Poincare points are kept (for
+   bifurcation diagrams).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from models.dynamics.integrate import periods, settle
-from models.dynamics.sdof import SDOFModel
+from models.dynamics.integrate import POINCARE_POINTS, TableSet, model_tables, sweep_kernel
+from models.dynamics.sdof import DynamicModel
 
 __all__ = ["SweepResult", "steady_state", "sweep", "sweep_up_down"]
 
@@ -46,11 +53,18 @@ class SweepResult:
     mean_dte : numpy.ndarray
         Mean DTE (units of ``L``).
     contact_loss, backside_impact, converged : numpy.ndarray
-        Flags (bool).
+        Flags (bool); ``converged`` is ``period > 0``.
     periods : numpy.ndarray
         Periods run to settle (int).
     length_scale_m : float
         ``L`` (m).
+    period : numpy.ndarray
+        Response period in mesh periods, 1..8, or 0 for aperiodic (int).
+    poincare : numpy.ndarray
+        ``(n, POINCARE_POINTS, 2)`` last Poincare points ``(x, x')``, oldest first (units of
+        ``L``); NaN where fewer periods were run.
+    entry_state : numpy.ndarray
+        ``(n, 2)`` state each point started from (the previous point's end state).
     """
 
     frequency: np.ndarray
@@ -62,6 +76,9 @@ class SweepResult:
     converged: np.ndarray
     periods: np.ndarray
     length_scale_m: float
+    period: np.ndarray
+    poincare: np.ndarray
+    entry_state: np.ndarray
 
     @property
     def arms_m(self) -> np.ndarray:
@@ -72,20 +89,109 @@ class SweepResult:
         """The same points in increasing frequency."""
         o = np.argsort(self.frequency, kind="stable")
         return SweepResult(
-            self.frequency[o],
-            self.amplitudes[o],
-            self.arms[o],
-            self.mean_dte[o],
-            self.contact_loss[o],
-            self.backside_impact[o],
-            self.converged[o],
-            self.periods[o],
-            self.length_scale_m,
+            **{
+                f.name: (
+                    getattr(self, f.name)
+                    if f.name == "length_scale_m"
+                    else getattr(self, f.name)[o]
+                )
+                for f in fields(self)
+            }
         )
 
 
+def _check(tol: float, min_periods: int, max_periods: int, record_periods: int) -> None:
+    if not tol >= 0:
+        raise ValueError(f"`tol` must be >= 0, was {tol!r}")
+    if not 0 <= min_periods <= max_periods:
+        raise ValueError(
+            f"need 0 <= `min_periods` <= `max_periods`, were {min_periods!r}, {max_periods!r}"
+        )
+    if record_periods < 1:
+        raise ValueError(f"`record_periods` must be >= 1, was {record_periods!r}")
+
+
+def empty_outputs(shape: tuple[int, ...]) -> dict[str, np.ndarray]:
+    """Output arrays of :func:`~models.dynamics.integrate.sweep_kernel` for ``shape`` points."""
+    return dict(
+        amps=np.zeros((*shape, 3)),
+        mean=np.zeros(shape),
+        loss=np.zeros(shape, dtype=np.bool_),
+        impact=np.zeros(shape, dtype=np.bool_),
+        periods_run=np.zeros(shape, dtype=np.int64),
+        period=np.zeros(shape, dtype=np.int64),
+        poinc=np.full((*shape, POINCARE_POINTS, 2), np.nan),
+        entry=np.zeros((*shape, 2)),
+    )
+
+
+def result_from_outputs(
+    freqs: np.ndarray, out: dict[str, np.ndarray], length_scale_m: float
+) -> SweepResult:
+    """Wrap kernel outputs (one sweep) as a :class:`SweepResult`."""
+    amps = out["amps"]
+    return SweepResult(
+        frequency=freqs,
+        amplitudes=amps,
+        arms=np.sqrt(np.sum(amps**2, axis=-1)),
+        mean_dte=out["mean"],
+        contact_loss=out["loss"],
+        backside_impact=out["impact"],
+        converged=out["period"] > 0,
+        periods=out["periods_run"],
+        length_scale_m=float(length_scale_m),
+        period=out["period"],
+        poincare=out["poinc"],
+        entry_state=out["entry"],
+    )
+
+
+def _run(
+    model: DynamicModel,
+    t: TableSet,
+    freqs: np.ndarray,
+    y: tuple[float, float],
+    tol: float,
+    min_periods: int,
+    max_periods: int,
+    record_periods: int,
+) -> tuple[SweepResult, tuple[float, float]]:
+    if not (np.all(np.isfinite(freqs)) and np.all(freqs > 0)):
+        raise ValueError("`frequencies` must be finite and > 0")
+    out = empty_outputs((freqs.size,))
+    x, v = sweep_kernel(
+        float(y[0]),
+        float(y[1]),
+        float(model.zeta),
+        float(model.force),
+        float(model.backlash),
+        t.kd,
+        t.ed,
+        t.kb,
+        t.eb,
+        t.drive_offset,
+        t.back_offset,
+        t.cos,
+        t.sin,
+        freqs,
+        float(tol),
+        int(min_periods),
+        int(max_periods),
+        int(record_periods),
+        out["amps"],
+        out["mean"],
+        out["loss"],
+        out["impact"],
+        out["periods_run"],
+        out["period"],
+        out["poinc"],
+        out["entry"],
+    )
+    return result_from_outputs(freqs, out, model.length_scale_m), (float(x), float(v))
+
+
 def steady_state(
-    model: SDOFModel,
+    model: DynamicModel,
     frequency: float,
     y0: tuple[float, float],
     *,
@@ -95,37 +201,33 @@ def steady_state(
     max_periods: int = 1000,
     record_periods: int = 4,
 ) -> tuple[tuple[float, float], dict]:
-    """Settle, record, and analyse one frequency; returns the end state and the figures."""
-    y, n, ok = settle(
-        model,
-        frequency,
-        y0,
-        steps_per_period=steps_per_period,
-        tol=tol,
-        min_periods=min_periods,
-        max_periods=max_periods,
+    """Settle, record, and analyse one frequency; returns the end state and the figures.
+
+    The figures: ``amplitudes`` (3,), ``arms``, ``mean_dte``, ``contact_loss``,
+    ``backside_impact``, ``converged``, ``periods`` (run to settle), ``period`` (0 aperiodic),
+    ``poincare`` (POINCARE_POINTS, 2).
+    """
+    _check(tol, min_periods, max_periods, record_periods)
+    t = model_tables(model, steps_per_period)
+    r, y = _run(
+        model, t, np.array([float(frequency)]), y0, tol, min_periods, max_periods, record_periods
     )
-    pts, xs, us = periods(
-        model, frequency, y, record_periods, steps_per_period=steps_per_period, record=True
-    )
-    assert xs is not None and us is not None
-    c = np.fft.rfft(xs) / xs.size
-    amps = 2.0 * np.abs(c[[record_periods * k for k in (1, 2, 3)]])
-    b = model.backlash
     figures = dict(
-        amplitudes=amps,
-        arms=float(np.sqrt(np.sum(amps**2))),
-        mean_dte=float(c[0].real),
-        contact_loss=bool(us.min() < b),
-        backside_impact=bool(us.min() < -b),
-        converged=ok,
-        periods=n,
+        amplitudes=r.amplitudes[0],
+        arms=float(r.arms[0]),
+        mean_dte=float(r.mean_dte[0]),
+        contact_loss=bool(r.contact_loss[0]),
+        backside_impact=bool(r.backside_impact[0]),
+        converged=bool(r.converged[0]),
+        periods=int(r.periods[0]),
+        period=int(r.period[0]),
+        poincare=r.poincare[0],
     )
-    return (float(pts[-1, 0]), float(pts[-1, 1])), figures
+    return y, figures
 
 
 def sweep(
-    model: SDOFModel,
+    model: DynamicModel,
     frequencies: ArrayLike,
     *,
     y0: tuple[float, float] | None = None,
@@ -135,38 +237,16 @@ def sweep(
     max_periods: int = 1000,
     record_periods: int = 4,
 ) -> SweepResult:
-    """Sweep ``Lambda`` in the order given, carrying the state; start at the static state."""
-    freqs = np.asarray(frequencies, dtype=float)
-    y = (model.static_dte() + model.error.mean, 0.0) if y0 is None else y0
-    rows = []
-    for lam in freqs:
-        y, fig = steady_state(
-            model,
-            float(lam),
-            y,
-            steps_per_period=steps_per_period,
-            tol=tol,
-            min_periods=min_periods,
-            max_periods=max_periods,
-            record_periods=record_periods,
-        )
-        rows.append(fig)
-    col = lambda key, dt=float: np.array([r[key] for r in rows], dtype=dt)  # noqa: E731
-    return SweepResult(
-        frequency=freqs,
-        amplitudes=np.array([r["amplitudes"] for r in rows]).reshape(-1, 3),
-        arms=col("arms"),
-        mean_dte=col("mean_dte"),
-        contact_loss=col("contact_loss", bool),
-        backside_impact=col("backside_impact", bool),
-        converged=col("converged", bool),
-        periods=col("periods", int),
-        length_scale_m=model.length_scale_m,
-    )
+    """Sweep ``Lambda`` in the order given, carrying the state; start at ``model.start_dte()``."""
+    _check(tol, min_periods, max_periods, record_periods)
+    freqs = np.ascontiguousarray(np.asarray(frequencies, dtype=float).ravel())
+    y = (model.start_dte(), 0.0) if y0 is None else y0
+    t = model_tables(model, steps_per_period)
+    return _run(model, t, freqs, y, tol, min_periods, max_periods, record_periods)[0]
 
 
 def sweep_up_down(
-    model: SDOFModel, frequencies: ArrayLike, **kwargs
+    model: DynamicModel, frequencies: ArrayLike, **kwargs
 ) -> tuple[SweepResult, SweepResult]:
     """Upward then downward sweep over the same frequencies (each from the static state).
 

@@ -62,6 +62,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from models.dynamics.dimensional import disc_inertia
 from models.errors import ModelError
 from models.stiffness.mesh_cycle import Harmonics
 
@@ -70,7 +71,6 @@ __all__ = [
     "SixStateSystem",
     "TwoStageModel",
     "TwoStageResponse",
-    "disc_inertia",
     "rigid_shaft_model",
     "six_state_from_gear_sets",
     "six_state_reference",
@@ -613,16 +613,6 @@ def rigid_shaft_model(
 
 
 # ----------------------------------------------------------------------------- gear sets
-def disc_inertia(pair, gear: int) -> float:
-    """Inertia of a solid steel disc at the base radius, ``J = pi rho w r_b^4 / 2`` (kg m^2).
-
-    ``w`` is the pair's (common) face width; no bore, no shaft.
-    """
-    r = pair.base_radius(gear)
-    mat = (pair.pinion if gear == 1 else pair.wheel).material
-    return math.pi * mat.density_kg_m3 * pair.face_width_m * r**4 / 2
-
-
 def six_state_from_gear_sets(
     stage1_set,
     stage2_set,
@@ -639,7 +629,8 @@ def six_state_from_gear_sets(
 ) -> SixStateSystem:
     """:class:`SixStateSystem` from two :class:`~models.geometry.GearSet` s (gears 1-2, 3-4).
 
-    Disc inertias (:func:`disc_inertia`), base radii as lever arms, load torque
+    Gear bodies as discs of the reference radius less the bore
+    (:func:`~models.dynamics.dimensional.disc_inertia`), base radii as lever arms, load torque
     ``T_2 = T_1 (r_2 r_4)/(r_1 r_3)`` (static balance), mesh damping from the damping ratios
     of the rigid-shaft reduction, ``c_i = 2 zeta_i sqrt(k_i m_i)``.
     """
@@ -685,8 +676,8 @@ def two_stage_from_gear_sets(
     """Build the model from two :class:`~models.geometry.GearSet` s (gears 1-2 and 3-4).
 
     :func:`six_state_from_gear_sets` with a rigid intermediate shaft (seed 001's assumption),
-    reduced by :func:`rigid_shaft_model`: solid discs at the base radius
-    (``J = pi rho w r^4 / 2``, face width of the pair; no bores), base radii as lever arms,
+    reduced by :func:`rigid_shaft_model`: gear bodies as discs of the reference radius less the
+    bore (``J = pi rho w (r^4 - r_i^4) / 2``, face width of the pair), base radii as lever arms,
     load torque ``T_2 = T_1 (r_2 r_4)/(r_1 r_3)``. ``stiffness`` are normalised series
     (mean 1), ``error_m`` in metres, ``thermal`` normalised by the stage mean stiffness.
     Returns the model and a dict of the dimensional scales (``omega_n``, ``L``, ``m1``,

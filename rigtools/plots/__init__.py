@@ -6,11 +6,14 @@ The presentation layer (STYLE.md, convention 5): plotting functions read the res
 
 Modules: ``stiffness`` (VVMS/FVMS, load sharing and LSTE over a mesh cycle; seed 003 Figs. 4, 6),
 ``thermal`` (thermoelastic mean mesh stiffness and mesh natural frequency against torque, with
-the critical compensation gap and the jammed state; seed 000 Tables 5-6), ``two_stage`` (peak-DTE
+the critical compensation gap and the jammed state; seed 000 Tables 5-6), ``dynamics`` (up/down
+Arms sweeps with contact-loss markers and the jump band, Poincare bifurcation diagrams of the
+SDOF models; seed 003 Figs. 8-11), ``two_stage`` (peak-DTE
 maps over mesh frequency x bulk temperature and bifurcation diagrams of the two-stage model;
 seed 001).
 """
 
+from rigtools.plots.dynamics import hysteresis_band, plot_sweep, plot_sweep_bifurcation
 from rigtools.plots.stiffness import (
     FIGURE_WIDTH_IN,
     mesh_cycle_figures,
@@ -25,18 +28,21 @@ from rigtools.plots.thermal import (
     seed_000_hot_state_closure,
     thermal_figures,
 )
-from rigtools.plots.two_stage import plot_bifurcation, plot_peak_dte_map
+from rigtools.plots.two_stage import plot_peak_dte_map, plot_two_stage_bifurcation
 
 __all__ = [
     "FIGURE_WIDTH_IN",
     "TABLE_6_TORQUES_NM",
     "ThermalClosure",
+    "hysteresis_band",
     "mesh_cycle_figures",
-    "plot_bifurcation",
     "plot_mesh_cycle",
     "plot_natural_frequency_vs_load",
     "plot_peak_dte_map",
     "plot_stiffness_vs_load",
+    "plot_sweep",
+    "plot_sweep_bifurcation",
+    "plot_two_stage_bifurcation",
     "save_png",
     "seed_000_hot_state_closure",
     "thermal_figures",

@@ -10,7 +10,7 @@ The presentation layer over :mod:`models.dynamics.two_stage_maps`: functions tak
   ``|DTE|`` (um) in colour over stage-1 mesh frequency (x) and bulk temperature (y)
   (``pcolormesh``), the cells with contact loss hatched and outlined by a contour, the
   back-side impacts marked with dots;
-* :func:`plot_bifurcation`: bifurcation-style diagram, the Poincare samples of the DTE of
+* :func:`plot_two_stage_bifurcation`: bifurcation-style diagram, the Poincare samples of the DTE of
   both stages (one per system period after the transient) against mesh frequency or bulk
   temperature, points coloured by the contact state (full contact, contact loss, back-side
   impact).
@@ -30,7 +30,7 @@ from matplotlib.patches import Patch
 
 from models.dynamics.two_stage_maps import Bifurcation, PeakDTEMap
 
-__all__ = ["plot_bifurcation", "plot_peak_dte_map"]
+__all__ = ["plot_peak_dte_map", "plot_two_stage_bifurcation"]
 
 _WIDTH_IN: Final = 7.0
 _STAGE_NAMES: Final = ("stage 1 (gears 1-2)", "stage 2 (gears 3-4)")
@@ -125,7 +125,7 @@ def plot_peak_dte_map(
     return fig
 
 
-def plot_bifurcation(result: Bifurcation, *, title: str | None = None) -> Figure:
+def plot_two_stage_bifurcation(result: Bifurcation, *, title: str | None = None) -> Figure:
     """Bifurcation diagram: Poincare samples of the DTE of both stages over the parameter.
 
     Parameters

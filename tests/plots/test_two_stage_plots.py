@@ -11,7 +11,7 @@ from matplotlib.figure import Figure
 
 from models.dynamics.two_stage_maps import bifurcation_over_frequency, peak_dte_map
 from rigtools.plots import save_png
-from rigtools.plots.two_stage import plot_bifurcation, plot_peak_dte_map
+from rigtools.plots.two_stage import plot_peak_dte_map, plot_two_stage_bifurcation
 
 FAST = dict(transient_periods=20, record_periods=4, steps_per_period=32)
 
@@ -54,7 +54,7 @@ def test_map_figure_with_down_sweep_sorts_frequency():
 
 def test_bifurcation_figure(tmp_path):
     b = bifurcation_over_frequency([3000.0, 5000.0, 7000.0], 80.0, **FAST)
-    fig = plot_bifurcation(b)
+    fig = plot_two_stage_bifurcation(b)
     panels = [ax for ax in fig.axes if ax.get_ylabel().startswith("DTE")]
     assert len(panels) == 2
     for st, ax in enumerate(panels):
@@ -68,7 +68,7 @@ def test_rejects_wrong_objects():
     with pytest.raises(ValueError):
         plot_peak_dte_map(object())  # type: ignore[arg-type]
     with pytest.raises(ValueError):
-        plot_bifurcation(object())  # type: ignore[arg-type]
+        plot_two_stage_bifurcation(object())  # type: ignore[arg-type]
     m = peak_dte_map([3000.0], [60.0], **FAST)
     with pytest.raises(ValueError):
         plot_peak_dte_map(m, quantity="rms")  # type: ignore[arg-type]
