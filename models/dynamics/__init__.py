@@ -16,6 +16,9 @@
 * :mod:`models.dynamics.two_stage_maps`: peak-DTE maps over mesh frequency x bulk temperature
   (seed 001's temperature stiffness), parallel over temperature rows, and Poincare data for
   bifurcation diagrams.
+* :mod:`models.dynamics.tribo`, :mod:`~models.dynamics.tribo_ehl_coupling`,
+  :mod:`~models.dynamics.tribo_case`: the six-DOF tribo-dynamic model of seed 002 with mixed
+  EHL, its iterative decoupling loop, and the shipped case ``seed-002-tribo``.
 """
 
 from models.dynamics.dimensional import (
@@ -50,6 +53,29 @@ from models.dynamics.sdof import (
     sdof_from_mesh_cycle,
 )
 from models.dynamics.sweep import SweepResult, steady_state, sweep, sweep_up_down
+from models.dynamics.tribo import (
+    TriboDynamics,
+    TriboRecord,
+    build_tribo_dynamics,
+    series_stiffness,
+    tribo_periods,
+    tribo_periods_reference,
+    tribo_settle,
+)
+from models.dynamics.tribo_case import (
+    TriboCase,
+    load_tribo_case,
+    shipped_tribo_cases,
+    solve_tribo_case,
+)
+from models.dynamics.tribo_ehl_coupling import (
+    ContactCycle,
+    Lubrication,
+    TriboSolution,
+    contact_cycle,
+    solve_tribo_dynamics,
+    tribo_iteration,
+)
 from models.dynamics.two_stage import (
     MeshStage,
     SixStateSystem,
@@ -81,10 +107,12 @@ __all__ = [
     "MODELS",
     "POINCARE_POINTS",
     "Bifurcation",
+    "ContactCycle",
     "DimensionalScaling",
     "DimensionalSweep",
     "DynamicModel",
     "ITMSModel",
+    "Lubrication",
     "MeshStage",
     "PeakDTEMap",
     "PeriodicCurve",
@@ -94,11 +122,17 @@ __all__ = [
     "SweepJob",
     "SweepResult",
     "ThermalStiffness",
+    "TriboCase",
+    "TriboDynamics",
+    "TriboRecord",
+    "TriboSolution",
     "TwoStageModel",
     "TwoStageResponse",
     "TwoStageThermalSetup",
     "bifurcation_over_frequency",
     "bifurcation_over_temperature",
+    "build_tribo_dynamics",
+    "contact_cycle",
     "dead_zone",
     "dead_zone_potential",
     "dimensional_scaling",
@@ -106,6 +140,7 @@ __all__ = [
     "equivalent_mass",
     "fvms_error_curve",
     "itms_from_mesh_cycle",
+    "load_tribo_case",
     "peak_dte_map",
     "periods",
     "periods_reference",
@@ -113,10 +148,14 @@ __all__ = [
     "printed_contact_force",
     "rigid_shaft_model",
     "sdof_from_mesh_cycle",
+    "series_stiffness",
     "settle",
     "settle_periodic",
+    "shipped_tribo_cases",
     "six_state_from_gear_sets",
     "six_state_reference",
+    "solve_tribo_case",
+    "solve_tribo_dynamics",
     "static_state",
     "steady_state",
     "sweep",
@@ -124,6 +163,10 @@ __all__ = [
     "sweep_up_down",
     "thermal_stiffness_component",
     "to_dimensional",
+    "tribo_iteration",
+    "tribo_periods",
+    "tribo_periods_reference",
+    "tribo_settle",
     "two_stage_at_temperature",
     "two_stage_from_gear_sets",
     "two_stage_periods",

@@ -4,8 +4,8 @@ Modules: ``lubricant`` (Doolittle-Tait viscosity ``mu(p, T)``, Carreau effective
 ``film`` (Moes' line-contact central film with the thermal factor ``C_t``, the film parameter
 ``Lambda``, the film stiffness ``k_h = -dF/dh_c``), ``asperity`` (Greenwood-Tripp ``F_n``
 integrals and asperity pressure, the film/asperity load split ``gamma_1, gamma_2`` by bisection,
-the signed mixed friction coefficient). The six-DOF dynamics and the iterative decoupling loop
-of seed 002 are not here yet.
+the signed mixed friction coefficient). The six-DOF dynamics and the decoupling loop
+that use them are in :mod:`models.dynamics.tribo` and :mod:`models.dynamics.tribo_ehl_coupling`.
 """
 
 from models.ehl.asperity import (

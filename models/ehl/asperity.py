@@ -88,7 +88,10 @@ def greenwood_tripp_integral(n: float, t: ArrayLike) -> np.ndarray:
     t : array_like
         Dimensionless separation ``h / sigma`` (-).
     """
+    # t above 40 gives F_n < 1e-300 (0 in double precision); capping it avoids overflow of the
+    # square below for the very thick films of nearly unloaded contacts
     t = np.asarray(t, float)
+    t = np.where(t > 40.0, 40.0, t)
     # s = t + y^2: integrand 2 y^(2n+1) exp(-(t + y^2)^2 / 2), y in [0, Y]; the Gaussian factor
     # is below 1e-40 for t + y^2 > 13.6.
     Y = np.sqrt(np.maximum(0.0, -t) + 13.6)[..., None]
@@ -129,8 +132,9 @@ class Roughness:
 SEED_002_ROUGHNESS = Roughness()
 
 
-def asperity_pressure(h_m: ArrayLike, reduced_modulus_Pa: ArrayLike,
-                      roughness: Roughness = SEED_002_ROUGHNESS) -> np.ndarray:
+def asperity_pressure(
+    h_m: ArrayLike, reduced_modulus_Pa: ArrayLike, roughness: Roughness = SEED_002_ROUGHNESS
+) -> np.ndarray:
     """Greenwood-Tripp nominal asperity pressure ``p_a(h)`` (Pa); formula in the module docstring.
 
     Parameters
@@ -142,8 +146,14 @@ def asperity_pressure(h_m: ArrayLike, reduced_modulus_Pa: ArrayLike,
     roughness : Roughness
     """
     s = roughness.sigma_m
-    K = (16 * math.sqrt(2) * math.pi / 15 * roughness.eta_beta_sigma ** 2
-         * math.sqrt(s / roughness.asperity_radius_m))
+    K = (
+        16
+        * math.sqrt(2)
+        * math.pi
+        / 15
+        * roughness.eta_beta_sigma**2
+        * math.sqrt(s / roughness.asperity_radius_m)
+    )
     t = (np.asarray(h_m, float) - roughness.d_d_m) / s
     return K * 0.5 * np.asarray(reduced_modulus_Pa, float) * greenwood_tripp_integral(2.5, t)
 
@@ -226,8 +236,9 @@ def mixed_contact(
     MixedContact
     """
     T = lubricant.T_ref_K if inlet_temperature_K is None else float(inlet_temperature_K)
-    w, R, u1, u2 = np.broadcast_arrays(*(np.asarray(a, float) for a in
-                                         (load_per_width_N_m, reduced_radius_m, u1_m_s, u2_m_s)))
+    w, R, u1, u2 = np.broadcast_arrays(
+        *(np.asarray(a, float) for a in (load_per_width_N_m, reduced_radius_m, u1_m_s, u2_m_s))
+    )
     E = float(reduced_modulus_Pa)
     b = np.sqrt(8 * w * R / (math.pi * E))
 
@@ -286,6 +297,6 @@ def mixed_contact_along_path(
     R = r1 * r2 / (r1 + r2)
     u1, u2 = pair.surface_velocities(s_m, pinion_speed_rpm)
     mat = pair.pinion.material
-    E = mat.youngs_modulus_Pa / (1 - mat.poisson_ratio ** 2)
+    E = mat.youngs_modulus_Pa / (1 - mat.poisson_ratio**2)
     w = np.asarray(load_N, float) / pair.face_width_m
     return mixed_contact(w, R, u1, u2, E, **kwargs)

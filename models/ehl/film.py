@@ -40,6 +40,7 @@ above. ``h_c = C_t h_c,iso``.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -62,11 +63,14 @@ __all__ = [
 def moes_groups(U: ArrayLike, G: ArrayLike, W: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Moes' ``M = W (2U)^-1/2`` and ``L = G (2U)^1/4`` (-) from Hamrock's U, G, W (-)."""
     U2 = 2 * np.asarray(U, float)
-    return np.asarray(W, float) / np.sqrt(U2), np.asarray(G, float) * U2 ** 0.25
+    return np.asarray(W, float) / np.sqrt(U2), np.asarray(G, float) * U2**0.25
 
 
 def moes_central_film(M: ArrayLike, L: ArrayLike) -> np.ndarray:
     """Moes' dimensionless central film ``H_c = h_c/R (2U)^-1/2`` for a line contact (-).
+
+    Evaluated in logarithms (``logaddexp``), so that very light loads (``M -> 0``, where
+    ``H_RI^(7/3)`` overflows a double) give the rigid-isoviscous limit ``3/M`` instead of inf.
 
     Parameters
     ----------
@@ -80,19 +84,25 @@ def moes_central_film(M: ArrayLike, L: ArrayLike) -> np.ndarray:
     """
     M = np.asarray(M, float)
     L = np.asarray(L, float)
-    H_RI = 3.0 / M
-    H_EI = 2.621 * M ** -0.2
+    # in logarithms: the powers overflow for very light loads (M -> 0, H_RI = 3/M -> inf)
+    lnM = np.log(M)
+    ln_ri = math.log(3.0) - lnM
+    ln_ei = math.log(2.621) - 0.2 * lnM
     with np.errstate(divide="ignore"):
-        H_RP = 1.287 * L ** (2 / 3)
-        H_EP = 1.311 * M ** -0.125 * L ** 0.75
-        s = 1.5 * (1 + np.exp(-1.2 * H_EI / H_RI))
-        iso = (H_RI ** (7 / 3) + H_EI ** (7 / 3)) ** (3 * s / 7)
-        piezo = (H_RP ** -3.5 + H_EP ** -3.5) ** (-2 * s / 7)  # 0 when L = 0
-    return (iso + piezo) ** (1 / s)
+        lnL = np.log(L)  # -inf when L = 0: the piezoviscous part vanishes
+    ln_rp = math.log(1.287) + (2 / 3) * lnL
+    ln_ep = math.log(1.311) - 0.125 * lnM + 0.75 * lnL
+    s = 1.5 * (1 + np.exp(-1.2 * np.exp(ln_ei - ln_ri)))
+    with np.errstate(invalid="ignore"):
+        ln_iso = (3 * s / 7) * np.logaddexp((7 / 3) * ln_ri, (7 / 3) * ln_ei)
+        ln_piezo = (-2 * s / 7) * np.logaddexp(-3.5 * ln_rp, -3.5 * ln_ep)
+    ln_piezo = np.where(np.isnan(ln_piezo), -np.inf, ln_piezo)
+    return np.exp(np.logaddexp(ln_iso, ln_piezo) / s)
 
 
-def thermal_reduction_factor(G: ArrayLike, W: ArrayLike, L_c: ArrayLike,
-                             slide_roll: ArrayLike) -> np.ndarray:
+def thermal_reduction_factor(
+    G: ArrayLike, W: ArrayLike, L_c: ArrayLike, slide_roll: ArrayLike
+) -> np.ndarray:
     """Seed 002's / Hsu-Lee thermal reduction factor ``C_t`` (-); formula in the module docstring.
 
     Parameters
@@ -104,8 +114,14 @@ def thermal_reduction_factor(G: ArrayLike, W: ArrayLike, L_c: ArrayLike,
     slide_roll : array_like
         Slide-to-roll ratio ``|u_1 - u_2| / u_m`` (-).
     """
-    return 1.0 / (1.0 + 0.0766 * np.asarray(G, float) ** 0.687 * np.asarray(W, float) ** 0.447
-                  * np.asarray(L_c, float) ** 0.527 * np.exp(0.875 * np.abs(slide_roll)))
+    return 1.0 / (
+        1.0
+        + 0.0766
+        * np.asarray(G, float) ** 0.687
+        * np.asarray(W, float) ** 0.447
+        * np.asarray(L_c, float) ** 0.527
+        * np.exp(0.875 * np.abs(slide_roll))
+    )
 
 
 @dataclass(frozen=True)
@@ -179,7 +195,7 @@ def central_film_thickness(
     M, L = moes_groups(U, G, W)
     h_iso = moes_central_film(M, L) * R * np.sqrt(2 * U)
     beta = lubricant.temperature_viscosity_coefficient(T)
-    L_c = beta * mu0 * um ** 2 / lubricant.conductivity_W_mK
+    L_c = beta * mu0 * um**2 / lubricant.conductivity_W_mK
     sr = np.abs(u1 - u2) / um
     C_t = thermal_reduction_factor(G, W, L_c, sr) if thermal else np.ones_like(h_iso)
     b = np.broadcast_arrays(h_iso, C_t, U, G, W, M, L, L_c, sr)
@@ -232,8 +248,15 @@ def film_stiffness(
         Relative load step of the difference (-).
     """
     F = np.asarray(load_N, float)
-    args = (reduced_radius_m, u1_m_s, u2_m_s, reduced_modulus_Pa, lubricant,
-            inlet_temperature_K, thermal)
+    args = (
+        reduced_radius_m,
+        u1_m_s,
+        u2_m_s,
+        reduced_modulus_Pa,
+        lubricant,
+        inlet_temperature_K,
+        thermal,
+    )
     hp = central_film_thickness(F * (1 + rel_step) / face_width_m, *args).h_c_m
     hm = central_film_thickness(F * (1 - rel_step) / face_width_m, *args).h_c_m
     h0 = central_film_thickness(F / face_width_m, *args).h_c_m

@@ -91,7 +91,8 @@ class Lubricant:
         K0 = self.K00_Pa * np.exp(-self.beta_K_per_K * T)
         Kp = self.K0_prime
         return (1 + self.a_V_per_K * (T - self.T_ref_K)) * (
-            1 - np.log1p(p / K0 * (1 + Kp)) / (1 + Kp))
+            1 - np.log1p(p / K0 * (1 + Kp)) / (1 + Kp)
+        )
 
     def viscosity(self, p_Pa: ArrayLike, T_K: ArrayLike) -> np.ndarray:
         """Doolittle-Tait low-shear viscosity ``mu(p, T)`` (Pa s); see the module docstring.
@@ -108,16 +109,16 @@ class Lubricant:
         expo = self.B0 * self.R0 * (1 / (x - self.R0) - 1 / (1 - self.R0))
         return self.mu_ref_Pas * np.exp(expo)
 
-    def temperature_viscosity_coefficient(self, T_K: ArrayLike, p_Pa: ArrayLike = 0.0
-                                          ) -> np.ndarray:
+    def temperature_viscosity_coefficient(
+        self, T_K: ArrayLike, p_Pa: ArrayLike = 0.0
+    ) -> np.ndarray:
         """``beta = -d ln(mu) / dT`` (1/K) by a central difference of :meth:`viscosity`."""
         T = np.asarray(T_K, float)
         d = 1e-2
         up, down = self.viscosity(p_Pa, T + d), self.viscosity(p_Pa, T - d)
         return -(np.log(up) - np.log(down)) / (2 * d)
 
-    def pressure_viscosity_coefficient(self, T_K: ArrayLike, p_Pa: ArrayLike = 0.0
-                                       ) -> np.ndarray:
+    def pressure_viscosity_coefficient(self, T_K: ArrayLike, p_Pa: ArrayLike = 0.0) -> np.ndarray:
         """Local ``d ln(mu) / dp`` (1/Pa) of the Doolittle-Tait model (one-sided at p = 0)."""
         p = np.asarray(p_Pa, float)
         d = 1e5

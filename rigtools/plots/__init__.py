@@ -10,7 +10,8 @@ the critical compensation gap and the jammed state; seed 000 Tables 5-6), ``dyna
 Arms sweeps with contact-loss markers and the jump band, Poincare bifurcation diagrams of the
 SDOF models; seed 003 Figs. 8-11), ``two_stage`` (peak-DTE
 maps over mesh frequency x bulk temperature and bifurcation diagrams of the two-stage model;
-seed 001).
+seed 001), ``tribo`` (film thickness, Lambda, friction and mesh force at the converged
+tribo-dynamic state; seed 002).
 """
 
 from rigtools.plots.dynamics import hysteresis_band, plot_sweep, plot_sweep_bifurcation
@@ -28,6 +29,7 @@ from rigtools.plots.thermal import (
     seed_000_hot_state_closure,
     thermal_figures,
 )
+from rigtools.plots.tribo import plot_tribo_solution
 from rigtools.plots.two_stage import plot_peak_dte_map, plot_two_stage_bifurcation
 
 __all__ = [
@@ -42,6 +44,7 @@ __all__ = [
     "plot_stiffness_vs_load",
     "plot_sweep",
     "plot_sweep_bifurcation",
+    "plot_tribo_solution",
     "plot_two_stage_bifurcation",
     "save_png",
     "seed_000_hot_state_closure",
