@@ -15,7 +15,9 @@
   seed's six-state system with a flexible intermediate shaft as a plain reference;
 * :mod:`models.dynamics.two_stage_maps`: peak-DTE maps over mesh frequency x bulk temperature
   (seed 001's temperature stiffness), parallel over temperature rows, and Poincare data for
-  bifurcation diagrams.
+  bifurcation diagrams;
+* :mod:`models.dynamics.two_stage_kernels`: all compiled two-stage kernels (RK4, map rows) in
+  one file, so numba's disk cache cannot go stale across modules;
 * :mod:`models.dynamics.tribo`, :mod:`~models.dynamics.tribo_ehl_coupling`,
   :mod:`~models.dynamics.tribo_case`: the six-DOF tribo-dynamic model of seed 002 with mixed
   EHL, its iterative decoupling loop, and the shipped case ``seed-002-tribo``.
@@ -77,10 +79,14 @@ from models.dynamics.tribo_ehl_coupling import (
     tribo_iteration,
 )
 from models.dynamics.two_stage import (
+    MAX_STEP_OMEGA,
     MeshStage,
     SixStateSystem,
     TwoStageModel,
     TwoStageResponse,
+    highest_frequency_bound,
+    min_steps_per_period,
+    natural_frequencies,
     rigid_shaft_model,
     six_state_from_gear_sets,
     six_state_reference,
@@ -104,6 +110,7 @@ from models.dynamics.two_stage_maps import (
 
 __all__ = [
     "MAX_PERIOD",
+    "MAX_STEP_OMEGA",
     "MODELS",
     "POINCARE_POINTS",
     "Bifurcation",
@@ -139,8 +146,11 @@ __all__ = [
     "disc_inertia",
     "equivalent_mass",
     "fvms_error_curve",
+    "highest_frequency_bound",
     "itms_from_mesh_cycle",
     "load_tribo_case",
+    "min_steps_per_period",
+    "natural_frequencies",
     "peak_dte_map",
     "periods",
     "periods_reference",

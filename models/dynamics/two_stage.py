@@ -48,10 +48,21 @@ Scaling: ``x_1 = q_1 / L``, ``x_3 = q_3 / L``, ``tau = omega_n t`` with
   ``(p/q) Lambda`` with ``p/q = z_3/z_2`` reduced, so the excitation repeats every ``q``
   stage-1 mesh periods (one *system period*).
 
+Damping acts on ``x'`` (``c q'``, the relative velocity of the gear bodies). Seed 001's
+printed state variable is ``u = q - e`` (its error enters as the forcing
+``F_e omega^2 cos(omega t)``, which is ``-e''``) with the damping on ``u'``; the two differ by
+the forcing term ``2 zeta eps'``, of the order of ``zeta Lambda eps``. Kept: the mesh
+damper acts on the bodies' motion; ``max |u|`` is reported alongside ``max |x|``
+(:class:`TwoStageResponse`).
+
 The integrator is the fixed-step RK4 of :mod:`models.dynamics.integrate` with the step a
 whole fraction of the stage-1 mesh period; tables of ``kappa`` and ``varepsilon`` at the
-``2 q N`` half steps of a system period, compiled (numba) and plain-Python reference with
-the same operations in the same order.
+``2 q N`` half steps of a system period, compiled (numba, :mod:`models.dynamics.two_stage_kernels`)
+and plain-Python reference with the same operations in the same order. The step must keep
+``h omega_max <= MAX_STEP_OMEGA`` (= 1) for the stiffest mode over the cycle
+(:func:`highest_frequency_bound`, :func:`min_steps_per_period`), else
+:class:`~models.errors.ModelError`: a fixed number of steps per mesh period is too few at low
+mesh frequency, and RK4 diverges beyond ``h omega = 2.83``.
 """
 
 from __future__ import annotations
@@ -60,17 +71,21 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
 from models.dynamics.dimensional import disc_inertia
+from models.dynamics.two_stage_kernels import _run
 from models.errors import ModelError
 from models.stiffness.mesh_cycle import Harmonics
 
 __all__ = [
+    "MAX_STEP_OMEGA",
     "MeshStage",
     "SixStateSystem",
     "TwoStageModel",
     "TwoStageResponse",
+    "highest_frequency_bound",
+    "min_steps_per_period",
+    "natural_frequencies",
     "rigid_shaft_model",
     "six_state_from_gear_sets",
     "six_state_reference",
@@ -88,6 +103,28 @@ def _unit() -> Harmonics:
 
 def _zero() -> Harmonics:
     return Harmonics(0.0, np.zeros(0), np.zeros(0))
+
+
+def _check_mesh_ratio(ratio) -> tuple[int, int]:
+    """``(p, q)`` as coprime positive integers, else :class:`ModelError`.
+
+    A non-integer would be truncated by the tables; a common factor (``(2, 4)``) would make
+    the tables span ``q`` stage-1 periods where ``q / gcd`` suffice, so a period-1 response
+    would be read as one Poincare point per *two* true system periods.
+    """
+    try:
+        p, q = ratio
+    except (TypeError, ValueError):
+        raise ModelError(f"`mesh_ratio` must be a pair of integers (p, q), was {ratio!r}") from None
+    ints = all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in (p, q))
+    if not (ints and p >= 1 and q >= 1):
+        raise ModelError(f"`mesh_ratio` must be two positive integers (p, q), was {ratio!r}")
+    if math.gcd(int(p), int(q)) != 1:
+        raise ModelError(
+            f"`mesh_ratio` {ratio!r} must be reduced (gcd(p, q) = 1): with a common factor the "
+            "system period would be counted as a multiple of the true one"
+        )
+    return int(p), int(q)
 
 
 @dataclass(frozen=True)
@@ -153,9 +190,9 @@ class TwoStageModel:
     mesh_ratio: tuple[int, int] = (1, 1)
 
     def __post_init__(self) -> None:
-        p, q = self.mesh_ratio
-        if not (int(p) >= 1 and int(q) >= 1 and self.omega2 > 0):
-            raise ModelError("TwoStageModel needs positive mesh_ratio integers and omega2 > 0")
+        _check_mesh_ratio(self.mesh_ratio)
+        if not self.omega2 > 0:
+            raise ModelError("TwoStageModel needs omega2 > 0")
         if not self.coupling1 * self.coupling2 < 1:
             raise ModelError("coupling1 * coupling2 must be < 1 (positive-definite mass)")
 
@@ -201,75 +238,88 @@ class TwoStageModel:
         )
 
 
-# ----------------------------------------------------------------------------- kernels
-@njit(cache=True)
-def _dz(u, b):  # pragma: no cover - compiled
-    if u > b:
-        return u - b
-    if u < -b:
-        return u + b
-    return 0.0
+#: Largest ``h omega_max`` the fixed-step RK4 is run with (``h`` the step in ``tau``,
+#: ``omega_max`` the bound of :func:`highest_frequency_bound`). RK4 is unstable on an
+#: undamped mode beyond ``h omega = 2 sqrt(2) = 2.83``; at ``h omega = 1`` it damps that mode
+#: by 0.6 % per step and shifts its frequency by 0.6 % (amplification factor
+#: ``|1 - z^2/2 + z^4/24 + i (z - z^3/6)|`` at ``z = 1``), less than the 5 % damping per
+#: radian the default ``zeta = 0.05`` gives it physically.
+MAX_STEP_OMEGA = 1.0
 
 
-@njit(cache=True)
-def _acc(x1, v1, x3, v3, k1, e1, k3, e3, P):  # pragma: no cover - compiled
-    g1 = 2.0 * P[0] * v1 + k1 * _dz(x1 - e1, P[1])
-    g3 = 2.0 * P[2] * P[6] * v3 + P[6] * P[6] * k3 * _dz(x3 - e3, P[3])
-    return P[4] - g1 + P[7] * g3, P[5] - g3 + P[8] * g1
+def _kappa_bound(s: MeshStage) -> float:
+    """Bound of ``|kappa|`` over the cycle: ``|mean|`` plus the sum of harmonic amplitudes."""
+    amp = float(np.sum(np.abs(s.stiffness.amplitude)))
+    if s.thermal is not None:
+        amp += float(np.sum(np.abs(s.thermal.amplitude)))
+    return abs(_mean_kappa(s)) + amp
 
 
-@njit(cache=True)
-def _run(y, P, T, h, n_sys, rec):  # pragma: no cover - compiled
-    """``n_sys`` system periods from ``y``; Poincare points and, if ``rec``, (x1,u1,x3,u3)."""
-    m = T.shape[1] // 2
-    x1, v1, x3, v3 = y[0], y[1], y[2], y[3]
-    pts = np.empty((n_sys, 4))
-    hist = np.empty((n_sys * m if rec else 0, 4))
-    i = 0
-    for s in range(n_sys):
-        for j in range(m):
-            j0 = 2 * j
-            j1 = j0 + 1
-            j2 = (j0 + 2) % (2 * m)
-            if rec:
-                hist[i, 0] = x1
-                hist[i, 1] = x1 - T[1, j0]
-                hist[i, 2] = x3
-                hist[i, 3] = x3 - T[3, j0]
-            a1, b1 = _acc(x1, v1, x3, v3, T[0, j0], T[1, j0], T[2, j0], T[3, j0], P)
-            x1b = x1 + 0.5 * h * v1
-            v1b = v1 + 0.5 * h * a1
-            x3b = x3 + 0.5 * h * v3
-            v3b = v3 + 0.5 * h * b1
-            a2, b2 = _acc(x1b, v1b, x3b, v3b, T[0, j1], T[1, j1], T[2, j1], T[3, j1], P)
-            x1c = x1 + 0.5 * h * v1b
-            v1c = v1 + 0.5 * h * a2
-            x3c = x3 + 0.5 * h * v3b
-            v3c = v3 + 0.5 * h * b2
-            a3, b3 = _acc(x1c, v1c, x3c, v3c, T[0, j1], T[1, j1], T[2, j1], T[3, j1], P)
-            x1d = x1 + h * v1c
-            v1d = v1 + h * a3
-            x3d = x3 + h * v3c
-            v3d = v3 + h * b3
-            a4, b4 = _acc(x1d, v1d, x3d, v3d, T[0, j2], T[1, j2], T[2, j2], T[3, j2], P)
-            x1n = x1 + h / 6.0 * (v1 + 2.0 * v1b + 2.0 * v1c + v1d)
-            v1n = v1 + h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-            x3n = x3 + h / 6.0 * (v3 + 2.0 * v3b + 2.0 * v3c + v3d)
-            v3n = v3 + h / 6.0 * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
-            x1, v1, x3, v3 = x1n, v1n, x3n, v3n
-            i += 1
-        pts[s, 0] = x1
-        pts[s, 1] = v1
-        pts[s, 2] = x3
-        pts[s, 3] = v3
-    return pts, hist
+def _stiffness_matrix(model: TwoStageModel, k1: float, k3: float) -> np.ndarray:
+    w, mu1, mu3 = model.omega2, model.coupling1, model.coupling2
+    return np.array([[k1, -mu1 * w * w * k3], [-mu3 * k1, w * w * k3]])
+
+
+def natural_frequencies(model: TwoStageModel) -> np.ndarray:
+    """Undamped natural frequencies of the mean-stiffness linearisation, units of ``omega_n``.
+
+    The drive-flank contact linearisation of the module's equations with ``kappa_i`` at its
+    mean (thermal mean included): ``x'' + K x = 0``, ``K = [[k_1, -mu_1 Omega^2 k_3],
+    [-mu_3 k_1, Omega^2 k_3]]``; returns ``sqrt(eig(K))`` sorted (shape ``(2,)``). These are
+    the system's two torsional modes; ``omega_n = sqrt(k_1 / m_1)`` (the scale) is not one
+    of them when the stages are coupled. Times ``omega_n / (2 pi)``: Hz.
+    """
+    k = _stiffness_matrix(model, _mean_kappa(model.stage1), _mean_kappa(model.stage2))
+    return np.sort(np.sqrt(np.linalg.eigvals(k).real))
+
+
+def highest_frequency_bound(model: TwoStageModel) -> float:
+    """Bound on the highest natural frequency over the mesh cycle (units of ``omega_n``).
+
+    As :func:`natural_frequencies` with each ``kappa_i`` at its upper bound over the cycle
+    (mean plus the sum of the harmonic amplitudes, thermal part included; eigenvalue moduli,
+    so an unstable, negative-stiffness mode counts by its growth rate). It grows without
+    bound as seed 001's ``k_w`` diverges near the initial temperature, which is why the RK4
+    step is chosen from it (:func:`min_steps_per_period`).
+    """
+    k = _stiffness_matrix(model, _kappa_bound(model.stage1), _kappa_bound(model.stage2))
+    return float(np.sqrt(np.max(np.abs(np.linalg.eigvals(k)))))
+
+
+def min_steps_per_period(model: TwoStageModel, frequency: float) -> int:
+    """Fewest RK4 steps per stage-1 mesh period with ``h omega_max <= MAX_STEP_OMEGA``.
+
+    ``h = 2 pi / (Lambda N)``, so ``N >= 2 pi omega_max / (Lambda MAX_STEP_OMEGA)``
+    (``frequency`` is ``Lambda``, ``omega_max`` from :func:`highest_frequency_bound`).
+    """
+    if not frequency > 0:
+        raise ModelError(f"`frequency` must be > 0, was {frequency!r}")
+    w = highest_frequency_bound(model)
+    return max(4, math.ceil(2.0 * math.pi * w / (frequency * MAX_STEP_OMEGA) - 1e-9))
+
+
+def _count(name: str, value, minimum: int) -> int:
+    """An integer count >= ``minimum``; refuses 2.5 (no silent truncation) and bools."""
+    if isinstance(value, bool) or not float(value).is_integer():
+        raise ModelError(f"`{name}` must be an integer, was {value!r}")
+    if int(value) < minimum:
+        raise ModelError(f"`{name}` must be >= {minimum}, was {value!r}")
+    return int(value)
 
 
 def _setup(model: TwoStageModel, frequency: float, steps_per_period: int):
-    if not frequency > 0 or steps_per_period < 4:
-        raise ModelError("need frequency > 0 and steps_per_period >= 4")
-    h = 2.0 * math.pi / (frequency * steps_per_period)
-    return model.params(), model.tables(steps_per_period), h
+    n = _count("steps_per_period", steps_per_period, 4)
+    if not frequency > 0:
+        raise ModelError("need frequency > 0")
+    h = 2.0 * math.pi / (frequency * n)
+    hw = h * highest_frequency_bound(model)
+    if not hw <= MAX_STEP_OMEGA:
+        raise ModelError(
+            f"RK4 step too long for the stiffest mode: h omega_max = {hw:.3g} > "
+            f"{MAX_STEP_OMEGA} with {n} steps per mesh period at Lambda = {frequency:.4g}; "
+            f"use steps_per_period >= {min_steps_per_period(model, frequency)}"
+        )
+    return model.params(), model.tables(n), h
 
 
 def two_stage_periods(
@@ -290,7 +340,7 @@ def two_stage_periods(
     """
     P, T, h = _setup(model, frequency, steps_per_period)
     y = np.asarray(y0, dtype=float).reshape(4)
-    pts, hist = _run(y, P, T, h, int(n_periods), bool(record))
+    pts, hist = _run(y, P, T, h, _count("n_periods", n_periods, 1), bool(record))
     return pts, (hist if record else None)
 
 
@@ -341,10 +391,32 @@ def two_stage_periods_reference(
 class TwoStageResponse:
     """Steady response at one mesh frequency (non-dimensional, units of ``L``).
 
-    ``peak`` is max ``|x|`` (peak |DTE|), ``amplitude`` half the peak-to-peak of ``x``;
-    ``contact_loss`` true if ``|x - eps| <= beta`` at any recorded step (with ``beta > 0``),
-    ``back_contact`` if ``x - eps < -beta`` (back-side impact). Index 0 stage 1, 1 stage 2.
-    ``history`` is ``(x1, u1, x3, u3)`` over the recorded periods.
+    Index 0 is stage 1, index 1 stage 2.
+
+    Attributes
+    ----------
+    frequency : float
+        ``Lambda`` (-).
+    peak : tuple of 2 float
+        ``max |x|`` over the recorded RK4 step starts: the peak |DTE| ``q / L``, static
+        deflection, half backlash and static error included (seed 001's "maximum amplitude
+        of the dynamic transmission error" read as the peak of ``q``). NaN if diverged.
+    amplitude : tuple of 2 float
+        Half the peak-to-peak of ``x`` (the vibration alone).
+    contact_loss, back_contact : tuple of 2 bool
+        ``|x - eps| <= beta`` at some recorded step (with ``beta > 0``); ``x - eps < -beta``
+        (back-side impact).
+    state : numpy.ndarray
+        ``(x1, x1', x3, x3')`` at the end.
+    history : numpy.ndarray
+        ``(x1, u1, x3, u3)`` over the recorded periods, ``u = x - eps``.
+    peak_deflection : tuple of 2 float
+        ``max |u|``, ``u = x - eps``: seed 001's state variable (its printed equations put
+        the error on the right-hand side as ``F_e omega^2 cos``, i.e. they integrate
+        ``u = q - e``); NaN if diverged.
+    diverged : bool
+        The state or the record turned non-finite (NaN/inf): the step is too long for the
+        stiffest mode or the model is unstable; all peaks are then NaN.
     """
 
     frequency: float
@@ -354,6 +426,8 @@ class TwoStageResponse:
     back_contact: tuple[bool, bool]
     state: np.ndarray
     history: np.ndarray
+    peak_deflection: tuple[float, float] = (math.nan, math.nan)
+    diverged: bool = False
 
 
 def two_stage_steady_response(
@@ -369,19 +443,41 @@ def two_stage_steady_response(
 
     ``y0`` defaults to the static equilibrium with mean stiffness and no error (drive-side
     contact): ``g_1 = (F_1 + mu_1 F_3)/(1 - mu_1 mu_3)``, ``g_3 = F_3 + mu_3 g_1``.
+    ``steps_per_period`` must keep ``h omega_max <= MAX_STEP_OMEGA``
+    (:func:`min_steps_per_period`), else :class:`~models.errors.ModelError`. A response that
+    still turns non-finite is returned with ``diverged`` set and NaN peaks.
     """
+    n_trans = _count("transient_periods", transient_periods, 0)
+    n_rec = _count("record_periods", record_periods, 1)
     if y0 is None:
         y0 = static_state(model)
-    pts, _ = two_stage_periods(
-        model, frequency, y0, transient_periods, steps_per_period=steps_per_period
-    )
-    start = pts[-1] if transient_periods > 0 else np.asarray(y0, dtype=float)
+    start = np.asarray(y0, dtype=float).reshape(4)
+    if n_trans > 0:
+        pts, _ = two_stage_periods(
+            model, frequency, start, n_trans, steps_per_period=steps_per_period
+        )
+        start = pts[-1]
     pts2, hist = two_stage_periods(
-        model, frequency, start, record_periods, steps_per_period=steps_per_period, record=True
+        model, frequency, start, n_rec, steps_per_period=steps_per_period, record=True
     )
     assert hist is not None
     b = (model.stage1.backlash, model.stage2.backlash)
+    diverged = not (np.all(np.isfinite(hist)) and np.all(np.isfinite(pts2[-1])))
+    nan2 = (math.nan, math.nan)
+    if diverged:
+        return TwoStageResponse(
+            float(frequency),
+            nan2,
+            nan2,
+            (False, False),
+            (False, False),
+            pts2[-1],
+            hist,
+            nan2,
+            True,
+        )
     peak = (float(np.max(np.abs(hist[:, 0]))), float(np.max(np.abs(hist[:, 2]))))
+    peak_u = (float(np.max(np.abs(hist[:, 1]))), float(np.max(np.abs(hist[:, 3]))))
     amp = (float(np.ptp(hist[:, 0]) / 2), float(np.ptp(hist[:, 2]) / 2))
 
     def lost(i: int) -> bool:
@@ -392,7 +488,7 @@ def two_stage_steady_response(
 
     loss = (lost(0), lost(1))
     back = (behind(0), behind(1))
-    return TwoStageResponse(float(frequency), peak, amp, loss, back, pts2[-1], hist)
+    return TwoStageResponse(float(frequency), peak, amp, loss, back, pts2[-1], hist, peak_u)
 
 
 def static_state(model: TwoStageModel) -> np.ndarray:
@@ -489,6 +585,7 @@ class SixStateSystem:
             raise ModelError("`shaft_stiffness_Nm_rad` must be > 0 (math.inf: rigid shaft)")
         if min(*self.mesh_damping_N_s_m, self.shaft_damping_Nms_rad, *self.half_backlash_m) < 0:
             raise ModelError("SixStateSystem needs damping and backlash >= 0")
+        _check_mesh_ratio(self.mesh_ratio)
 
 
 def _stage(h: Harmonics | None, ph):

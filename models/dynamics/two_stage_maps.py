@@ -16,26 +16,78 @@ Only the mesh stiffness, through seed 001's temperature stiffness (its ``k = k_t
   ``Delta_M`` the bulk temperature (the map axis) and ``Delta_f`` Blok's flash temperature
   (:func:`models.thermal.flash_temperature`, effusivity form of SEED-NOTES 12, Hertz
   half-width of SEED-NOTES 13, seed 000's load share ``R`` and friction 0.132 since seed 001
-  gives no value). The flash temperature depends on the speed, so on the mesh frequency:
-  it is evaluated at the speed of each map column (``n_1 = 60 f_mesh / z_1``);
-* the profile deformations ``sigma_i`` are the flank normal deformations of
-  :func:`models.thermal.thermal_deformation` with the reference at ``Delta_0``, the gear body
-  uniformly at the bulk temperature, the flash temperature as the local rise, and a fixed
-  centre distance (seed 001 says nothing about the housing);
+  gives no value), evaluated at the speed of each map column (``n_1 = 60 f_mesh / z_1``,
+  stage 2 at ``n_1 z_1 / z_2``);
+* the profile deformation of flank ``i`` is ``sigma_i = sigma_M,i + sigma_f,i``: the body
+  part ``sigma_M,i`` is the flank normal deformation of
+  :func:`models.thermal.thermal_deformation` with the reference at ``Delta_0``, the gear
+  uniformly at the bulk temperature and a fixed centre distance (seed 001 says nothing about
+  the housing), which is ``xi (Delta_M - Delta_0) rho_i`` by similarity; the flash part
+  ``sigma_f,i`` is that of a heated surface layer (next section);
 * per tooth pair ``j`` in the path of contact at mesh phase ``tau``,
   ``k_{w,j} = F R_j / (sigma_1 + sigma_2)`` (seed 001's ``k_wi = F/(b sigma_i)`` in series,
   times the face width, :func:`models.thermal.temperature_stiffness`), and the pairs in contact
   add in parallel: ``k_w(tau) = sum_j k_{w,j}``. Divided by the stage's mean ``k_t`` and
   expanded in ``n_harmonics`` mesh harmonics, it is the ``thermal`` series of
-  :class:`~models.dynamics.MeshStage` (``k_w`` steps where a pair enters or leaves the
-  path, seed 000's share jumping from 0 to 0.36: the truncated series rings there, as the
-  stiffness harmonics of :mod:`models.stiffness.mesh_cycle` do).
+  :class:`~models.dynamics.MeshStage`. Without flash ``sigma_1 + sigma_2 = xi dT (rho_1 +
+  rho_2) = xi dT T_1T_2`` for every pair, so ``k_w = F / (xi dT T_1T_2)`` at every phase (the
+  shares sum to 1) and the series is a constant; the flash layer adds a ripple of about
+  1e-4 of the mean (``ThermalStiffness.fit_residual``).
 
+What seed 001 says about ``k_w``, and what is implemented: ``k_wi = F / (b sigma_i)`` with
+``sigma_i`` "the resultant profile deformation ... derived considering the thermal state of
+the gear body" under ``Delta(t) = Delta_B(t) - Delta_0``, the two teeth in series, and
+``k = k_t + k_w``; it gives no depth for the flash temperature and no numbers for ``k_w``.
+Implemented are the seed's formulas with ``F`` the pair's share ``F R_j``, ``b k_w`` in N/m
+(units: :func:`models.thermal.temperature_stiffness`), the body at ``Delta_M`` and the flash
+temperature confined to the surface layer it heats.
+
+The flash temperature: a surface layer, not the whole tooth
+-----------------------------------------------------------
+Blok's flash temperature is a surface temperature reached while a surface point crosses the
+Hertzian band, in the contact time ``t_c,i = 2 b_H / v_i`` (``v_i`` the flank's tangential
+velocity); Blok's formula itself rests on the heat penetrating only a depth small against
+the band (high Peclet number). Over a time ``t`` a surface flux ``q`` into a half-space
+gives ``theta(z, t) = (2 q / lambda) sqrt(kappa t) ierfc(z / (2 sqrt(kappa t)))``
+(Carslaw and Jaeger 1959, sec. 2.9), surface value ``(2 q / lambda) sqrt(kappa t / pi)``,
+``kappa = lambda / (rho c)`` the diffusivity: the heat stays within the thermal penetration
+depth ``delta = sqrt(kappa t)``. A free layer expands normal to the surface by
+``xi int_0^inf theta dz = xi q t / (rho c) = (sqrt(pi)/2) xi theta_s delta``. Implemented:
+
+.. math:: \sigma_{f,i} = \xi_i\, \Delta_f\, \delta_i, \qquad
+          \delta_i = \sqrt{\kappa_i\, 2 b_H / v_i},
+
+leaving out the factor ``sqrt(pi)/2 = 0.89`` and the lateral constraint of a layer bonded to
+the colder body (``(1 + nu)/(1 - nu) = 1.86`` in plane strain), both of order one. For seed
+001's 45 steel (``kappa = 1.23e-5 m^2/s``) at 10 kN and 40 deg C the flash temperature
+reaches 74.5 K at 10000 rpm, ``delta`` is about 13 um, and ``sigma_f,1 + sigma_f,2`` is
+0.018 um at most, against 10.6 um from the 20 K bulk rise. ``Delta_f delta_i`` is
+proportional to ``q t_c / (rho c)``, the frictional heat per unit flank area
+(``f w |v_1 - v_2| / v_i``, shared between the flanks), which does not depend on the speed:
+in this reading ``k_w`` does not depend on the mesh frequency.
+
+``flash_model="whole-tooth"`` keeps the other reading, the flash temperature as the local
+rise of the whole tooth (``ThermalReference(flash_counts_as_local_rise=True)``, seed 000's
+``Delta t_k``): it is what seed 001's sentence says if read literally, and the only reading
+in which ``k_w`` depends on speed (its maps are over mesh frequency). It heats the whole
+tooth to a temperature reached only within ~13 um of the surface and overstates
+``sigma_f`` about 350-fold (6.3 um instead of 0.018 um in the example above; ``k_w`` 12 %
+lower at 10000 rpm than at 1000 rpm): it is kept for comparison with that literal
+reading, not as physics.
+
+Validity near the initial temperature
+-------------------------------------
 ``k_w`` *falls* as the temperature rises (``sigma`` grows linearly with the rise) and
 diverges as the rise vanishes (the seed's formula; see
-:func:`models.thermal.temperature_stiffness`): bulk temperatures must lie above ``Delta_0``.
-The mesh stiffness is always above ``k_t``, so the natural frequencies sit above the
-isothermal ones and drift down as the gears heat.
+:func:`models.thermal.temperature_stiffness`). With the defaults ``k_w / k_t`` is 0.50 at
+40 deg C and 0.10 at 120 deg C on stage 1, 0.74 and 0.15 on stage 2 (twice the load over a
+longer ``T_1T_2``). Below a minimum rise the "temperature stiffness" dominates the mesh stiffness
+and, as the stiffest mode grows without bound, the fixed-step integration needs ever more
+steps: :class:`TwoStageThermalSetup` refuses bulk temperatures at which ``k_w`` exceeds
+``max_thermal_ratio`` (default 1) times the mean ``k_t`` (with the defaults: below 34.9 deg C,
+set by stage 2), and warns when the harmonic series misses ``k_w`` by more than
+``fit_tolerance``. The mesh stiffness is always above ``k_t``, so the natural frequencies sit
+above the isothermal ones and drift down as the gears heat.
 
 The backlash does not depend on temperature in seed 001 (its ``D_12``, ``D_34`` are fixed
 parameters of each map). Seed 000's physics (thermal expansion closes the gap) is available
@@ -51,7 +103,7 @@ typical ``c_gamma = 20 N/(mm um)`` times the 95 mm face width), the non-dimensio
 (10 um, so the seed's ``D = 1`` is a 10 um half backlash), the stiffness fluctuation (one
 harmonic, the seed's ``k = 0.2``; or, with ``stiffness_source="mesh-cycle"``, the VVMS of
 :func:`models.stiffness.mesh_cycle` from the potential-energy compliance, whose means, 1.72e9
-and 1.79e9 N/m at 10 and 20 kN, are within 10 % of the ISO default), the error (one harmonic,
+and 1.79e9 N/m at 10 and 20 kN, are within 11 % of the ISO default), the error (one harmonic,
 the seed's ``e = 0.2``) and 5 % damping.
 
 Computation
@@ -59,14 +111,24 @@ Computation
 The map is a grid of steady responses, the state carried along frequency within a row
 (up-sweep, or down), the rows (temperatures) independent: a numba ``prange`` over rows
 (``parallel=True``), each row serial. The per-point work is the compiled RK4 of
-:func:`models.dynamics.two_stage_periods` (the same kernel, so a map point is bit for bit
-:func:`~models.dynamics.two_stage_steady_response` from the same start), the serial and the
-parallel drivers run the same row function, so their results are identical.
-Peak DTE is ``max |q|`` over the recorded periods at the RK4 step starts (metres); contact
-loss and back-side contact flags are those of :class:`~models.dynamics.TwoStageResponse`.
-The Poincare samples are the DTEs at the end of each recorded *system* period (``q``
-stage-1 mesh periods, the period of the combined excitation): one distinct value per
-frequency for a period-1 response, ``n`` for period ``n``, a cloud for chaos.
+:func:`models.dynamics.two_stage_periods` (the same kernel,
+:mod:`models.dynamics.two_stage_kernels`, so a map point is bit for bit
+:func:`~models.dynamics.two_stage_steady_response` from the same start with the same steps
+per period), the serial and the parallel drivers run the same row function, so their
+results are identical. The RK4 step is set per frequency column so that ``h omega_max <= 1``
+for the stiffest mode over the cycle (:func:`~models.dynamics.two_stage.min_steps_per_period`):
+at low mesh frequency a fixed number of steps per mesh period would make the step too long
+and the integration diverge. A point whose state still turns non-finite is flagged in
+``PeakDTEMap.diverged`` with NaN results, and the next point restarts from its static state.
+
+Peak DTE is ``max |q|`` over the recorded periods at the RK4 step starts (metres), static
+deflection, backlash offset and static error included; ``peak_deflection_m`` is ``max |u|``,
+``u = q - e``, seed 001's state variable (its equations put the error on the right-hand side
+as ``F_e omega^2 cos``). Contact loss and back-side contact flags are those of
+:class:`~models.dynamics.TwoStageResponse`. The Poincare samples are the DTEs at the end of
+each recorded *system* period (``q`` stage-1 mesh periods, the period of the combined
+excitation): one distinct value per frequency for a period-1 response, ``n`` for period
+``n``, a cloud for chaos.
 
 References
 ----------
@@ -75,25 +137,33 @@ References
    temperature).
 .. [2] ISO 6336-1:2019, *Calculation of load capacity of spur and helical gears - Part 1*,
    mesh stiffness ``c_gamma``.
+.. [3] H. S. Carslaw, J. C. Jaeger, *Conduction of Heat in Solids*, 2nd ed., Oxford, 1959,
+   sec. 2.9 (constant flux into a semi-infinite solid; penetration depth ``sqrt(kappa t)``).
+.. [4] H. Blok, "Theoretical study of temperature rise at surfaces of actual contact under
+   oiliness lubricating conditions", IMechE, 1937 (flash temperature, high-Peclet premise).
 """
 
 from __future__ import annotations
 
 import math
+import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Literal
 
 import numpy as np
-from numba import njit, prange
 
 from models.dynamics.two_stage import (
     TwoStageModel,
-    _run,
+    _count,
+    min_steps_per_period,
+    natural_frequencies,
     rigid_shaft_model,
     six_state_from_gear_sets,
     static_state,
 )
+from models.dynamics.two_stage_kernels import _alloc, _map_parallel, _map_serial
 from models.errors import ModelError
 from models.geometry import GearSet, load_gear_set
 from models.geometry.gear_pair import GearPair
@@ -158,6 +228,12 @@ class TwoStageThermalSetup:
         For the flash temperature (-).
     flash : bool
         Add the flash temperature to the contact temperature rise (seed 001: yes).
+    flash_model : {"surface-layer", "whole-tooth"}
+        How the flash temperature deforms the flank (module docstring): ``"surface-layer"``
+        (default) expands only the layer it penetrates during the contact time,
+        ``sigma_f = xi Delta_f sqrt(kappa 2 b_H / v)``; ``"whole-tooth"`` heats the whole
+        tooth to it (seed 001 read literally, kept for comparison; overstates ``sigma_f``
+        by two to three orders of magnitude).
     thermal : bool
         Include the temperature stiffness at all (False: isothermal ``k_t`` only).
     backlash_reference : ThermalReference or None
@@ -165,6 +241,15 @@ class TwoStageThermalSetup:
         seed 000's thermal closure of the gap (module docstring).
     n_phases, n_harmonics : int
         Samples of ``k_w`` over a mesh cycle, and harmonics kept.
+    max_thermal_ratio : float
+        Refuse (:class:`~models.errors.ModelError`) a bulk temperature at which ``k_w``
+        exceeds this multiple of the stage's mean ``k_t`` anywhere in the cycle (-).
+        Seed 001's ``k_w ~ 1/(Delta_M - Delta_0)`` diverges at the initial temperature; with
+        the defaults ``k_w = k_t`` at 29.9 deg C on stage 1 and 34.9 deg C on stage 2
+        (``k_w / k_t`` = 0.50 and 0.74 at 40 deg C). ``math.inf`` disables the check.
+    fit_tolerance : float
+        Warn (``RuntimeWarning``) when the ``n_harmonics`` series misses the sampled ``k_w``
+        by more than this fraction of its mean (``ThermalStiffness.fit_residual``).
     """
 
     stage1: str = "two-stage-45-steel"
@@ -180,16 +265,25 @@ class TwoStageThermalSetup:
     initial_temperature_C: float = 20.0
     friction_coefficient: float = FRICTION_SEED_000
     flash: bool = True
+    flash_model: Literal["surface-layer", "whole-tooth"] = "surface-layer"
     thermal: bool = True
     backlash_reference: ThermalReference | None = None
     n_phases: int = 128
     n_harmonics: int = 10
+    max_thermal_ratio: float = 1.0
+    fit_tolerance: float = 0.05
 
     def __post_init__(self) -> None:
         if not (self.normal_load_N >= 0 and self.length_scale_m > 0):
             raise ModelError("`normal_load_N` must be >= 0 and `length_scale_m` > 0")
         if not (self.n_phases >= 2 * self.n_harmonics + 2 and self.n_harmonics >= 0):
             raise ModelError("`n_phases` must be >= 2 n_harmonics + 2")
+        if self.flash_model not in ("surface-layer", "whole-tooth"):
+            raise ModelError(
+                f"`flash_model` must be 'surface-layer' or 'whole-tooth', was {self.flash_model!r}"
+            )
+        if not (self.max_thermal_ratio > 0 and self.fit_tolerance > 0):
+            raise ModelError("`max_thermal_ratio` and `fit_tolerance` must be > 0")
         if self.stiffness_source not in ("harmonic", "mesh-cycle"):
             raise ModelError(
                 f"`stiffness_source` must be 'harmonic' or 'mesh-cycle', was "
@@ -218,6 +312,12 @@ class ThermalStiffness:
         Highest flash temperature over the cycle (K), shape ``(n_speeds,)``.
     harmonics : tuple of Harmonics
         ``k_w / k_mean`` as a mesh-harmonic series, one per speed.
+    flash_deformation_max_m : numpy.ndarray
+        Highest flash part ``sigma_f,1 + sigma_f,2`` of the deformation over the path of
+        contact (m), shape ``(n_speeds,)``; 0 without flash.
+    fit_residual : numpy.ndarray
+        ``max |series - k_w / k_mean|`` at the sampled phases over the series mean (-), shape
+        ``(n_speeds,)``: how well ``n_harmonics`` harmonics carry ``k_w``.
     """
 
     phase: np.ndarray
@@ -225,12 +325,25 @@ class ThermalStiffness:
     k_w_N_m: np.ndarray
     flash_max_K: np.ndarray
     harmonics: tuple[Harmonics, ...]
+    flash_deformation_max_m: np.ndarray
+    fit_residual: np.ndarray
 
 
 def _fit(values: np.ndarray, n_harmonics: int) -> Harmonics:
     c = np.fft.rfft(values) / values.size
     k = slice(1, n_harmonics + 1)
     return Harmonics(float(c[0].real), 2 * np.abs(c[k]), np.angle(c[k]))
+
+
+def _flash_layer_depth(pair: GearPair, ft) -> tuple[np.ndarray, np.ndarray]:
+    """Thermal penetration depths ``delta_i = sqrt(kappa_i 2 b_H / v_i)`` of both flanks (m)."""
+    out = []
+    for gear, v in ((pair.pinion, ft.velocity_pinion_m_s), (pair.wheel, ft.velocity_wheel_m_s)):
+        m = gear.material
+        kappa = m.conductivity_W_mK / (m.density_kg_m3 * m.specific_heat_J_kgK)
+        t_c = np.divide(2.0 * ft.half_width_m, v, out=np.zeros(np.shape(v)), where=v > 0)
+        out.append(np.sqrt(kappa * t_c))
+    return out[0], out[1]
 
 
 def thermal_stiffness_component(
@@ -243,6 +356,7 @@ def thermal_stiffness_component(
     initial_temperature_C: float = 20.0,
     friction_coefficient: float = FRICTION_SEED_000,
     flash: bool = True,
+    flash_model: Literal["surface-layer", "whole-tooth"] = "surface-layer",
     n_phases: int = 128,
     n_harmonics: int = 10,
 ) -> ThermalStiffness:
@@ -260,7 +374,7 @@ def thermal_stiffness_component(
         Total normal load ``F`` of the stage (N).
     mean_stiffness_N_m : float
         ``k_t`` mean (N/m) that normalises the harmonics.
-    initial_temperature_C, friction_coefficient, flash, n_phases, n_harmonics
+    initial_temperature_C, friction_coefficient, flash, flash_model, n_phases, n_harmonics
         As in :class:`TwoStageThermalSetup`.
 
     Returns
@@ -269,10 +383,20 @@ def thermal_stiffness_component(
 
     Notes
     -----
-    .. math:: k_w(\tau) = \sum_j \frac{F R(s_j)}{\sigma_1(s_j) + \sigma_2(s_j)}, \quad
-              s_j = A + (\tau + j) p_b \in [A, E]
+    .. math:: k_w(	au) = \sum_j rac{F R(s_j)}{\sigma_1(s_j) + \sigma_2(s_j)}, \quad
+              s_j = A + (	au + j) p_b \in [A, E],
+              \qquad \sigma_i = \sigma_{M,i} + \sigma_{f,i}
 
-    with ``sigma_i`` the normal flank deformations under ``Delta_M + Delta_f - Delta_0``.
+    ``sigma_M,i`` the normal flank deformation of gear ``i`` with the body uniformly at
+    ``Delta_M`` (:func:`models.thermal.thermal_deformation`, reference ``Delta_0``; by
+    similarity ``xi (Delta_M - Delta_0) rho_i``) and ``sigma_f,i`` the flash part:
+
+    * ``"surface-layer"`` (default): ``sigma_f,i = xi_i Delta_f delta_i`` with the thermal
+      penetration depth ``delta_i = sqrt(kappa_i t_c,i)`` over the contact time
+      ``t_c,i = 2 b_H / v_i`` (module docstring, "The flash temperature");
+    * ``"whole-tooth"``: the flash temperature as the local rise of the whole tooth
+      (``ThermalReference(flash_counts_as_local_rise=True)``), seed 001's wording taken
+      literally; overstates ``sigma_f`` by about 600x at 40 deg C, 10000 rpm.
 
     Examples
     --------
@@ -293,6 +417,10 @@ def thermal_stiffness_component(
             f"`bulk_temperature_C` must exceed the initial temperature {t0} deg C, was {t_b}: "
             "seed 001's k_w = F / (b sigma) diverges as the thermal deformation vanishes"
         )
+    if flash_model not in ("surface-layer", "whole-tooth"):
+        raise ModelError(
+            f"`flash_model` must be 'surface-layer' or 'whole-tooth', was {flash_model!r}"
+        )
     speed = np.atleast_1d(np.asarray(pinion_speed_rpm, dtype=float))
     if speed.ndim != 1 or np.any(~(speed > 0)):
         raise ModelError("`pinion_speed_rpm` must be a 1-d array of speeds > 0")
@@ -302,7 +430,6 @@ def thermal_stiffness_component(
     s = a + (phase[:, None] + np.arange(n_slots)[None, :]) * pb  # (P, slots)
     share = np.where(s <= e, load_share_seed_000(pair, np.minimum(s, e)), 0.0)
     s_eval = np.minimum(s, e)
-    ref = ThermalReference(t0, flash_counts_as_local_rise=bool(flash))
     torque = normal_load_N * pair.base_radius(1)
     ft = flash_temperature(
         pair,
@@ -313,17 +440,35 @@ def thermal_stiffness_component(
         friction_coefficient=friction_coefficient,
         load_share=share,
     )
-    d = thermal_deformation(
-        pair, s_eval, ref, GearTemperature.uniform(t_b), flash=ft if flash else None
-    )
-    sig1 = np.broadcast_to(d.pinion.normal_m, (speed.size, *s.shape))
-    sig2 = np.broadcast_to(d.wheel.normal_m, (speed.size, *s.shape))
+    shape = (speed.size, *s.shape)
+    bulk = thermal_deformation(pair, s_eval, ThermalReference(t0), GearTemperature.uniform(t_b))
+    sig_m = bulk.pinion.normal_m + bulk.wheel.normal_m
+    sig1 = np.broadcast_to(bulk.pinion.normal_m, shape)
+    sig2 = np.broadcast_to(bulk.wheel.normal_m, shape)
+    if flash and flash_model == "surface-layer":
+        d1, d2 = _flash_layer_depth(pair, ft)
+        fk = np.broadcast_to(ft.flash_K, shape)
+        sig1 = sig1 + pair.pinion.material.thermal_expansion_per_K * fk * d1
+        sig2 = sig2 + pair.wheel.material.thermal_expansion_per_K * fk * d2
+    elif flash:
+        ref = ThermalReference(t0, flash_counts_as_local_rise=True)
+        d = thermal_deformation(pair, s_eval, ref, GearTemperature.uniform(t_b), flash=ft)
+        sig1 = np.broadcast_to(d.pinion.normal_m, shape)
+        sig2 = np.broadcast_to(d.wheel.normal_m, shape)
     kw = temperature_stiffness(normal_load_N * share, pair.face_width_m, sig1, sig2)
     k_pair = np.where(share > 0, kw.pair_N_m, 0.0)
     k_w = k_pair.sum(axis=-1)
     harm = tuple(_fit(row / mean_stiffness_N_m, int(n_harmonics)) for row in k_w)
-    fmax = np.broadcast_to(ft.flash_K, (speed.size, *s.shape)).max(axis=(1, 2))
-    return ThermalStiffness(phase, speed, k_w, fmax, harm)
+    resid = np.array(
+        [
+            np.max(np.abs(h(phase) - row / mean_stiffness_N_m)) / h.mean
+            for h, row in zip(harm, k_w, strict=True)
+        ]
+    )
+    inside = share > 0
+    sig_f = np.where(inside, sig1 + sig2 - sig_m, 0.0).max(axis=(1, 2))
+    fmax = np.broadcast_to(ft.flash_K, shape).max(axis=(1, 2))
+    return ThermalStiffness(phase, speed, k_w, fmax, harm, sig_f, resid)
 
 
 def _closure_half_backlash(
@@ -357,6 +502,34 @@ def _vvms(gear_set: str, normal_load_N: float, n_phases: int, n_harmonics: int) 
     return cyc.vvms_harmonics
 
 
+def _check_thermal(
+    setup: TwoStageThermalSetup,
+    temperature_C: float,
+    comps: list[ThermalStiffness],
+    k_mean: tuple[float, float],
+) -> None:
+    """Refuse ``k_w > max_thermal_ratio k_t``; warn when the harmonic fit misses ``k_w``."""
+    rise = temperature_C - setup.initial_temperature_C
+    for st, (c, km) in enumerate(zip(comps, k_mean, strict=True)):
+        ratio = float(np.max(c.k_w_N_m)) / km
+        if not ratio <= setup.max_thermal_ratio:
+            raise ModelError(
+                f"stage {st + 1}: seed 001's temperature stiffness k_w reaches {ratio:.3g} k_t "
+                f"at {temperature_C} deg C ({rise:.3g} K above the initial temperature), above "
+                f"max_thermal_ratio = {setup.max_thermal_ratio}: k_w = F / (b sigma) diverges "
+                f"as the rise vanishes (it is ~1/rise), so the model is not meaningful this "
+                f"close to {setup.initial_temperature_C} deg C; choose a higher bulk temperature"
+            )
+        worst = float(np.max(c.fit_residual))
+        if worst > setup.fit_tolerance:
+            warnings.warn(
+                f"stage {st + 1} at {temperature_C} deg C: {setup.n_harmonics} harmonics miss "
+                f"k_w by up to {worst:.3g} of its mean (fit_tolerance {setup.fit_tolerance})",
+                RuntimeWarning,
+                stacklevel=3,
+            )
+
+
 def _models_at_temperature(
     setup: TwoStageThermalSetup, temperature_C: float, frequencies_Hz: np.ndarray
 ) -> list[tuple[TwoStageModel, dict, float]]:
@@ -378,30 +551,27 @@ def _models_at_temperature(
         km = setup.mean_stiffness_N_m
         stiff = (Harmonics(1.0, np.array([kf[0]]), z), Harmonics(1.0, np.array([kf[1]]), z))
     if setup.thermal:
-        th1 = thermal_stiffness_component(
-            p1,
-            temperature_C,
-            n1,
-            setup.normal_load_N,
-            mean_stiffness_N_m=km[0],
-            initial_temperature_C=setup.initial_temperature_C,
-            friction_coefficient=setup.friction_coefficient,
-            flash=setup.flash,
-            n_phases=setup.n_phases,
-            n_harmonics=setup.n_harmonics,
-        ).harmonics
-        th2 = thermal_stiffness_component(
-            p2,
-            temperature_C,
-            n3,
-            f2,
-            mean_stiffness_N_m=km[1],
-            initial_temperature_C=setup.initial_temperature_C,
-            friction_coefficient=setup.friction_coefficient,
-            flash=setup.flash,
-            n_phases=setup.n_phases,
-            n_harmonics=setup.n_harmonics,
-        ).harmonics
+        comps = [
+            thermal_stiffness_component(
+                pair,
+                temperature_C,
+                speed,
+                load,
+                mean_stiffness_N_m=k_mean,
+                initial_temperature_C=setup.initial_temperature_C,
+                friction_coefficient=setup.friction_coefficient,
+                flash=setup.flash,
+                flash_model=setup.flash_model,
+                n_phases=setup.n_phases,
+                n_harmonics=setup.n_harmonics,
+            )
+            for pair, speed, load, k_mean in (
+                (p1, n1, setup.normal_load_N, km[0]),
+                (p2, n3, f2, km[1]),
+            )
+        ]
+        _check_thermal(setup, temperature_C, comps, km)
+        th1, th2 = comps[0].harmonics, comps[1].harmonics
     b = (
         _closure_half_backlash(setup, p1, setup.half_backlash_m[0], temperature_C),
         _closure_half_backlash(setup, p2, setup.half_backlash_m[1], temperature_C),
@@ -439,92 +609,6 @@ def two_stage_at_temperature(
     return _models_at_temperature(s, float(temperature_C), np.array([float(frequency_Hz)]))[0]
 
 
-# ----------------------------------------------------------------------------- kernels
-@njit(cache=True)
-def _fill_row(
-    i, Y0, P, T, H, order, carry, n_trans, n_rec, peak, amp, loss, back, poinc
-):  # pragma: no cover - compiled
-    y = Y0[i, order[0]].copy()
-    for jj in range(order.size):
-        j = order[jj]
-        if not carry:
-            y = Y0[i, j].copy()
-        pts, _ = _run(y, P[i, j], T[i, j], H[j], n_trans, False)
-        if n_trans > 0:
-            y = pts[n_trans - 1].copy()
-        pts2, hist = _run(y, P[i, j], T[i, j], H[j], n_rec, True)
-        b1 = P[i, j, 1]
-        b3 = P[i, j, 3]
-        mx1 = 0.0
-        mx3 = 0.0
-        lo1 = hist[0, 0]
-        hi1 = hist[0, 0]
-        lo3 = hist[0, 2]
-        hi3 = hist[0, 2]
-        l1 = False
-        l3 = False
-        k1 = False
-        k3 = False
-        for r in range(hist.shape[0]):
-            x1 = hist[r, 0]
-            x3 = hist[r, 2]
-            u1 = hist[r, 1]
-            u3 = hist[r, 3]
-            mx1 = max(mx1, abs(x1))
-            mx3 = max(mx3, abs(x3))
-            lo1 = min(lo1, x1)
-            hi1 = max(hi1, x1)
-            lo3 = min(lo3, x3)
-            hi3 = max(hi3, x3)
-            if b1 > 0 and abs(u1) <= b1:
-                l1 = True
-            if b3 > 0 and abs(u3) <= b3:
-                l3 = True
-            if u1 < -b1:
-                k1 = True
-            if u3 < -b3:
-                k3 = True
-        peak[i, j, 0] = mx1
-        peak[i, j, 1] = mx3
-        amp[i, j, 0] = (hi1 - lo1) / 2
-        amp[i, j, 1] = (hi3 - lo3) / 2
-        loss[i, j, 0] = l1
-        loss[i, j, 1] = l3
-        back[i, j, 0] = k1
-        back[i, j, 1] = k3
-        for s in range(n_rec):
-            poinc[i, j, s, 0] = pts2[s, 0]
-            poinc[i, j, s, 1] = pts2[s, 2]
-        y = pts2[n_rec - 1].copy()
-
-
-def _alloc(Y0, n_rec):
-    nt, nf = Y0.shape[0], Y0.shape[1]
-    return (
-        np.empty((nt, nf, 2)),
-        np.empty((nt, nf, 2)),
-        np.zeros((nt, nf, 2), dtype=np.bool_),
-        np.zeros((nt, nf, 2), dtype=np.bool_),
-        np.empty((nt, nf, n_rec, 2)),
-    )
-
-
-@njit(parallel=True, cache=True)
-def _map_parallel(
-    Y0, P, T, H, order, carry, n_trans, n_rec, peak, amp, loss, back, poinc
-):  # pragma: no cover - compiled
-    for i in prange(Y0.shape[0]):
-        _fill_row(i, Y0, P, T, H, order, carry, n_trans, n_rec, peak, amp, loss, back, poinc)
-
-
-@njit(cache=True)
-def _map_serial(
-    Y0, P, T, H, order, carry, n_trans, n_rec, peak, amp, loss, back, poinc
-):  # pragma: no cover - compiled
-    for i in range(Y0.shape[0]):
-        _fill_row(i, Y0, P, T, H, order, carry, n_trans, n_rec, peak, amp, loss, back, poinc)
-
-
 # ----------------------------------------------------------------------------- maps
 @dataclass(frozen=True)
 class PeakDTEMap:
@@ -541,15 +625,34 @@ class PeakDTEMap:
     frequency_ratio : numpy.ndarray
         ``Lambda = 2 pi f / omega_n`` (-), shape ``(n_f,)``.
     natural_frequency_Hz : float
-        ``omega_n / (2 pi)`` of stage 1 with the mean ``k_t`` (Hz), the frequency scale.
+        ``omega_n / (2 pi)``, ``omega_n = sqrt(k_1 / m_1)`` with stage 1's mean ``k_t`` (Hz):
+        the frequency *scale* of the non-dimensional model, not a mode of the coupled system
+        (see ``mode_frequency_Hz``).
+    mode_frequency_Hz : numpy.ndarray
+        The two undamped natural frequencies of the mean-stiffness system, thermal part
+        included (:func:`~models.dynamics.two_stage.natural_frequencies`) (Hz), shape
+        ``(n_t, n_f, 2)`` (the flash part of ``k_w`` may depend on the speed).
     peak_dte_m : numpy.ndarray
-        Peak ``|DTE|`` over the recorded periods (m), shape ``(n_t, n_f, 2)``.
+        Peak ``|DTE|`` ``max |q|`` over the recorded periods at the RK4 step starts (m),
+        shape ``(n_t, n_f, 2)``: static deflection, half backlash and static error included.
+        NaN where ``diverged``.
+    peak_deflection_m : numpy.ndarray
+        ``max |u|``, ``u = q - e`` (m), same shape: seed 001's state variable (see
+        :class:`~models.dynamics.two_stage.TwoStageResponse`). NaN where ``diverged``.
     amplitude_m : numpy.ndarray
         Half peak-to-peak DTE (m), same shape.
     contact_loss, back_contact : numpy.ndarray of bool
         Teeth separated inside the backlash / hit the back flank, same shape.
     poincare_m : numpy.ndarray
         DTE at the end of each recorded system period (m), shape ``(n_t, n_f, n_rec, 2)``.
+    diverged : numpy.ndarray of bool
+        Shape ``(n_t, n_f)``: the state or record turned non-finite; results NaN, and the
+        next point of the row started from its static state instead of this one's.
+    steps_per_period : numpy.ndarray of int
+        RK4 steps per stage-1 mesh period used in each frequency column, shape ``(n_f,)``:
+        at least the requested number, more where the stiffest mode needs it
+        (``h omega_max <= MAX_STEP_OMEGA``,
+        :func:`~models.dynamics.two_stage.min_steps_per_period`).
     mesh_ratio : tuple[int, int]
         ``(p, q)``; a system period is ``q`` stage-1 mesh periods.
     direction : {"up", "down"}
@@ -571,6 +674,10 @@ class PeakDTEMap:
     direction: str
     continuation: bool
     setup: TwoStageThermalSetup = field(repr=False, default_factory=TwoStageThermalSetup)
+    peak_deflection_m: np.ndarray = field(default_factory=lambda: np.empty((0, 0, 2)))
+    diverged: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=bool))
+    steps_per_period: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    mode_frequency_Hz: np.ndarray = field(default_factory=lambda: np.empty((0, 0, 2)))
 
 
 def _as_axis(name: str, v) -> np.ndarray:
@@ -585,31 +692,50 @@ class _Grid:
     Y0: np.ndarray
     P: np.ndarray
     T: np.ndarray
+    M: np.ndarray
     H: np.ndarray
     order: np.ndarray
     lam: np.ndarray
+    steps: np.ndarray
+    modes: np.ndarray
     scales: dict
     mesh_ratio: tuple[int, int]
+
+    def kernel_args(self) -> tuple:
+        """The grid arguments of the map kernels, in order."""
+        return self.Y0, self.P, self.T, self.M, self.H, self.order
 
 
 def _prepare_grid(
     setup: TwoStageThermalSetup, f: np.ndarray, t: np.ndarray, n: int, direction: str
 ) -> _Grid:
-    """Models at every grid point, as the kernels' arrays (static states, params, tables)."""
+    """Models at every grid point, as the kernels' arrays (static states, params, tables).
+
+    Column ``j`` runs ``N_j = max(n, min_steps_per_period)`` RK4 steps per stage-1 mesh
+    period (the largest over the temperatures), its tables padded to the longest column.
+    """
     rows = [_models_at_temperature(setup, float(tc), f) for tc in t]
     m0, sc0, _ = rows[0][0]
     p, q = m0.mesh_ratio
+    lam = np.array([lam for _, _, lam in rows[0]])
+    steps = np.array(
+        [max(n, *(min_steps_per_period(row[j][0], lam[j]) for row in rows)) for j in range(f.size)],
+        dtype=np.int64,
+    )
     Y0 = np.empty((t.size, f.size, 4))
     P = np.empty((t.size, f.size, 9))
-    T = np.empty((t.size, f.size, 4, 2 * q * n))
+    T = np.zeros((t.size, f.size, 4, 2 * q * int(steps.max())))
+    modes = np.empty((t.size, f.size, 2))
     for i, row in enumerate(rows):
         for j, (model, _, _) in enumerate(row):
             Y0[i, j] = static_state(model)
             P[i, j] = model.params()
-            T[i, j] = model.tables(n)
-    lam = np.array([lam for _, _, lam in rows[0]])
+            T[i, j, :, : 2 * q * steps[j]] = model.tables(int(steps[j]))
+            modes[i, j] = natural_frequencies(model)
     order = np.arange(f.size) if direction == "up" else np.arange(f.size)[::-1].copy()
-    return _Grid(Y0, P, T, 2.0 * math.pi / (lam * n), order, lam, sc0, (int(p), int(q)))
+    M = (2 * q * steps).astype(np.int64)
+    H = 2.0 * math.pi / (lam * steps)
+    return _Grid(Y0, P, T, M, H, order, lam, steps, modes, sc0, (int(p), int(q)))
 
 
 def peak_dte_map(
@@ -631,15 +757,17 @@ def peak_dte_map(
     frequencies_Hz : array_like
         Stage-1 mesh frequencies (Hz), > 0, swept in the given order (``"up"``) or reversed.
     temperatures_C : array_like
-        Bulk temperatures (deg C), above ``setup.initial_temperature_C`` when thermal.
+        Bulk temperatures (deg C), above ``setup.initial_temperature_C`` when thermal (and
+        high enough for ``setup.max_thermal_ratio``).
     setup : TwoStageThermalSetup or None
         Model inputs; None: the defaults.
     transient_periods, record_periods : int
         System periods dropped at each point, then recorded (the first point of a row
         starts from the static state; with ``continuation`` the others from the previous
-        point's final state).
+        point's final state, or from their static state after a diverged point).
     steps_per_period : int
-        RK4 steps per stage-1 mesh period.
+        Least RK4 steps per stage-1 mesh period; a column gets more where the stiffest mode
+        needs them (``PeakDTEMap.steps_per_period``).
     direction : {"up", "down"}
         Frequency sweep direction within each row.
     continuation : bool
@@ -658,32 +786,23 @@ def peak_dte_map(
         raise ModelError("`frequencies_Hz` must be > 0")
     if direction not in ("up", "down"):
         raise ModelError(f"`direction` must be 'up' or 'down', was {direction!r}")
-    n = int(steps_per_period)
-    if n < 4 or int(record_periods) < 1 or int(transient_periods) < 0:
-        raise ModelError("need steps_per_period >= 4, record_periods >= 1, transient >= 0")
+    n = _count("steps_per_period", steps_per_period, 4)
+    n_rec = _count("record_periods", record_periods, 1)
+    n_trans = _count("transient_periods", transient_periods, 0)
     grid = _prepare_grid(s, f, t, n, direction)
-    out = _alloc(grid.Y0, int(record_periods))
-    kernel = _map_parallel if parallel else _map_serial
-    kernel(
-        grid.Y0,
-        grid.P,
-        grid.T,
-        grid.H,
-        grid.order,
-        bool(continuation),
-        int(transient_periods),
-        int(record_periods),
-        *out,
-    )
+    out = _alloc(t.size, f.size, n_rec)
+    kernel: Callable[..., None] = _map_parallel if parallel else _map_serial
+    kernel(*grid.kernel_args(), bool(continuation), n_trans, n_rec, *out)
     p, q = grid.mesh_ratio
-    lam, sc0 = grid.lam, grid.scales
-    peak, amp, loss, back, poinc = out
+    sc0 = grid.scales
+    peak, peak_u, amp, loss, back, div, poinc = out
     L = sc0["L"]
+    wn_hz = sc0["omega_n"] / (2 * math.pi)
     return PeakDTEMap(
         frequency_Hz=f,
         temperature_C=t,
-        frequency_ratio=lam,
-        natural_frequency_Hz=sc0["omega_n"] / (2 * math.pi),
+        frequency_ratio=grid.lam,
+        natural_frequency_Hz=wn_hz,
         peak_dte_m=peak * L,
         amplitude_m=amp * L,
         contact_loss=loss,
@@ -693,6 +812,10 @@ def peak_dte_map(
         direction=direction,
         continuation=bool(continuation),
         setup=s,
+        peak_deflection_m=peak_u * L,
+        diverged=div,
+        steps_per_period=grid.steps,
+        mode_frequency_Hz=grid.modes * wn_hz,
     )
 
 

@@ -4,6 +4,8 @@ The maps and diagrams come from coarse runs of models.dynamics.two_stage_maps; t
 the drawn data back (colour-mesh values, Poincare points) against the result objects.
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 from matplotlib.collections import QuadMesh
@@ -50,6 +52,46 @@ def test_map_figure_with_down_sweep_sorts_frequency():
     ax = next(a for a in fig.axes if a.get_title().startswith("stage"))
     mesh = next(c for c in ax.collections if isinstance(c, QuadMesh))
     np.testing.assert_allclose(np.asarray(mesh.get_array()).ravel(), m.peak_dte_m[0, ::-1, 0] * 1e6)
+
+
+def test_map_figure_sorts_temperatures_and_shows_the_modes():
+    """Unsorted temperatures used to garble pcolormesh (edges from unsorted centres)."""
+    t = np.array([120.0, 40.0, 80.0])
+    f = np.array([3000.0, 5000.0])
+    m = peak_dte_map(f, t, **FAST)
+    fig = plot_peak_dte_map(m, quantity="deflection")
+    ax = next(a for a in fig.axes if a.get_title().startswith("stage"))
+    mesh = next(c for c in ax.collections if isinstance(c, QuadMesh))
+    order = np.argsort(t)
+    np.testing.assert_allclose(
+        np.asarray(mesh.get_array()).reshape(3, 2), m.peak_deflection_m[order, :, 0] * 1e6
+    )
+    np.testing.assert_allclose(mesh.get_coordinates()[:, 0, 1], [20.0, 60.0, 100.0, 140.0])
+    # dashed mode lines: mode frequency (kHz) against the sorted temperatures
+    dashed = [ln for ln in ax.get_lines() if ln.get_linestyle() == "--"]
+    assert len(dashed) == 2
+    np.testing.assert_allclose(dashed[0].get_ydata(), t[order])
+    np.testing.assert_allclose(
+        dashed[1].get_xdata(), m.mode_frequency_Hz[order, :, 1].mean(axis=1) / 1e3
+    )
+    title = fig.get_suptitle()
+    assert "modes" in title and "40 deg C" in title and "f_n" not in title
+    lo = m.mode_frequency_Hz[order[0]].mean(axis=0) / 1e3
+    assert f"{lo[0]:.2f}/{lo[1]:.2f} kHz" in title
+
+
+def test_map_figure_marks_diverged_points(dte_map):
+    div = np.zeros(dte_map.diverged.shape, dtype=bool)
+    div[1, 2] = True
+    peak = dte_map.peak_dte_m.copy()
+    peak[1, 2] = np.nan
+    m = dataclasses.replace(dte_map, diverged=div, peak_dte_m=peak)
+    fig = plot_peak_dte_map(m)
+    ax = next(a for a in fig.axes if a.get_title().startswith("stage"))
+    crosses = [ln for ln in ax.get_lines() if ln.get_marker() == "x"]
+    assert len(crosses) == 1
+    assert crosses[0].get_xdata()[0] == pytest.approx(7.0)  # 7 kHz
+    assert crosses[0].get_ydata()[0] == pytest.approx(80.0)
 
 
 def test_bifurcation_figure(tmp_path):
