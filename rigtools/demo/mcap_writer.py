@@ -36,7 +36,8 @@ from rigtools.schemas import schema_path
 if TYPE_CHECKING:
     from mcap.records import Schema
 
-__all__ = ["flatten_run_metadata", "write_accel_mcap", "write_imu_mcap"]
+__all__ = ["flatten_run_metadata", "imu_cdr_payloads", "write_accel_mcap", "write_imu_cdr_mcap",
+           "write_imu_mcap"]
 
 Compression = Literal["zstd", "lz4", "none"]
 _LIBRARY = "rigtools.demo.mcap_writer"
@@ -285,5 +286,145 @@ def write_imu_mcap(
                 "linear_acceleration_covariance": [0.0] * 9,
             }
             w.write_message(topic, imu, msg, log_time=log_ns, sequence=k)
+        w.finish()
+    return out
+
+
+def imu_cdr_payloads(
+    stamps_ns: np.ndarray, accel_m_s2: np.ndarray, *, frame_id: str = "imu_link",
+    big_endian: bool = False,
+) -> np.ndarray:
+    """CDR ``sensor_msgs/msg/Imu`` payloads of many samples at once, one row per message.
+
+    The layout is the one ``mcap-ros2-support`` (and a ROS 2 driver) serialises: the 4-byte
+    encapsulation header (``00 01`` little-endian, ``00 00`` big-endian, options ``00 00``),
+    ``int32 sec``, ``uint32 nanosec``, ``uint32`` length and bytes of ``frame_id`` with its
+    NUL, padding to 8 bytes counted from the end of the encapsulation header, then the
+    orientation (0, 0, 0, 1), 9 zero covariances, a zero angular velocity, 9 zero covariances,
+    the linear acceleration (m/s^2) and 9 zero covariances, all float64.
+
+    Parameters
+    ----------
+    stamps_ns : numpy.ndarray
+        Header stamps (ns since the UNIX epoch, int64), shape ``(n,)``.
+    accel_m_s2 : numpy.ndarray
+        Linear acceleration x, y, z (m/s^2), shape ``(n, 3)``.
+    frame_id : str
+        Header frame id (the same in every message).
+    big_endian : bool
+        Big-endian CDR (encapsulation kind 0) instead of little-endian (kind 1).
+
+    Returns
+    -------
+    numpy.ndarray
+        uint8, shape ``(n, length)``: row ``i`` is the payload of message ``i``.
+    """
+    stamps = np.asarray(stamps_ns, np.int64)
+    acc = np.asarray(accel_m_s2, np.float64)
+    if acc.shape != (stamps.size, 3):
+        raise ValueError(f"`accel_m_s2` must have shape ({stamps.size}, 3), was {acc.shape}")
+    name = frame_id.encode("utf-8") + b"\0"
+    e = ">" if big_endian else "<"
+    body = (12 + len(name) + 7) & ~7  # stamp, length word, frame id and padding
+    n_bytes = 4 + body + 8 * 37
+    dt = np.dtype({"names": ["enc", "sec", "nsec", "slen", "name", "f"],
+                   "formats": ["4u1", e + "i4", e + "u4", e + "u4", f"{len(name)}u1",
+                               (e + "f8", (37,))],
+                   "offsets": [0, 4, 8, 12, 16, 4 + body], "itemsize": n_bytes})
+    out = np.zeros(stamps.size, dt)
+    out["enc"] = (0, 0 if big_endian else 1, 0, 0)
+    sec, nsec = np.divmod(stamps, 1_000_000_000)
+    out["sec"] = sec
+    out["nsec"] = nsec
+    out["slen"] = len(name)
+    out["name"] = np.frombuffer(name, np.uint8)
+    f = out["f"]
+    f[:, 3] = 1.0  # orientation.w
+    f[:, 25:28] = acc
+    return out.view(np.uint8).reshape(stamps.size, n_bytes)
+
+
+def write_imu_cdr_mcap(
+    path: str | Path,
+    stamps_ns: np.ndarray,
+    accel_m_s2: np.ndarray,
+    *,
+    topic: str = "/imu",
+    frame_id: str = "imu_link",
+    big_endian: bool = False,
+    scalars: Mapping[str, tuple[np.ndarray, np.ndarray]] | None = None,
+    log_delay_ns: int = 0,
+    compression: Compression = "zstd",
+    chunk_size: int = 1 << 20,
+) -> Path:
+    """Write many ``sensor_msgs/msg/Imu`` messages fast (a driver's per-sample stream).
+
+    The same file :func:`write_imu_mcap` writes (schema ``ros2msg``
+    :data:`~rigtools.ingest.mcap_decoders.IMU_SCHEMA_TEXT`, channel encoding ``cdr``), but
+    the payloads are laid out with array operations (:func:`imu_cdr_payloads`), so millions
+    of messages take seconds, and big-endian CDR can be written too. ``std_msgs/msg/Float64``
+    topics in ``scalars`` (topic -> ``(time_s, values)``, ``log_time = time_s``) are
+    interleaved in log-time order.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        Output file.
+    stamps_ns : numpy.ndarray
+        Header stamps (ns since the UNIX epoch, int64), shape ``(n,)``.
+    accel_m_s2 : numpy.ndarray
+        Linear acceleration x, y, z (m/s^2), shape ``(n, 3)``.
+    topic, frame_id : str
+        Imu topic and header frame id.
+    big_endian : bool
+        Big-endian CDR payloads.
+    scalars : mapping, optional
+        ``std_msgs/msg/Float64`` topics.
+    log_delay_ns : int
+        Imu ``log_time`` = header stamp + this delay (ns).
+    compression : {"zstd", "lz4", "none"}
+        Chunk compression.
+    chunk_size : int
+        Target uncompressed chunk size (bytes).
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
+    from mcap.writer import Writer
+
+    stamps = np.asarray(stamps_ns, np.int64)
+    rows = imu_cdr_payloads(stamps, accel_m_s2, frame_id=frame_id, big_endian=big_endian)
+    log = (stamps + int(log_delay_ns)).tolist()
+    out = Path(path)
+    with open(out, "wb") as f:
+        w = Writer(f, chunk_size=chunk_size, compression=_compression(compression))
+        w.start(profile="ros2", library=_LIBRARY)
+        sid = w.register_schema(IMU_SCHEMA_NAME, "ros2msg", IMU_SCHEMA_TEXT.encode())
+        cid = w.register_channel(topic, "cdr", sid)
+        events: list[tuple[int, int, int, bytes]] = []
+        if scalars:
+            fsid = w.register_schema("std_msgs/msg/Float64", "ros2msg", b"float64 data\n")
+            for name, (ts, values) in scalars.items():
+                scid = w.register_channel(name, "cdr", fsid)
+                vals = np.asarray(values, np.float64)
+                for j, t in enumerate(np.asarray(ts, np.float64).tolist()):
+                    events.append((_to_ns(t), scid, j,
+                                   b"\0\1\0\0" + vals[j : j + 1].astype("<f8").tobytes()))
+            events.sort()
+        add = w.add_message
+        k = 0
+        data = rows.tobytes()
+        size = rows.shape[1]
+        for i, t in enumerate(log):
+            while k < len(events) and events[k][0] < t:
+                lt, scid, j, payload = events[k]
+                add(scid, log_time=lt, data=payload, publish_time=lt, sequence=j)
+                k += 1
+            add(cid, log_time=t, data=data[i * size : (i + 1) * size], publish_time=t,
+                sequence=i)
+        for lt, scid, j, payload in events[k:]:
+            add(scid, log_time=lt, data=payload, publish_time=lt, sequence=j)
         w.finish()
     return out

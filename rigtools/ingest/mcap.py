@@ -10,6 +10,8 @@ module                                   what it holds
 :mod:`~rigtools.ingest.mcap_decompress`  chunk size limits, bounded zstd/lz4 decompression, CRC
 :mod:`~rigtools.ingest.mcap_container`   the streaming record walk (:func:`iter_messages`)
 :mod:`~rigtools.ingest.mcap_decoders`    payload decoders chosen by message encoding and schema
+:mod:`~rigtools.ingest.mcap_cdr`         ROS 2 (CDR) messages of one constant layout read a chunk
+                                         at a time (per-sample Imu and sensor streams)
 :mod:`~rigtools.ingest.mcap_timing`      Imu grids fitted to stamps, counter restarts
 :mod:`~rigtools.ingest.mcap_handlers`    per-channel handlers feeding the builder
 this module                              ``NAME``, ``KIND``, :func:`sniff`, :func:`ingest`

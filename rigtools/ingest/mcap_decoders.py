@@ -43,6 +43,7 @@ import functools
 from collections.abc import Callable
 from typing import Any
 
+from rigtools.ingest.mcap_cdr import Ros2BlockDecoder, decode_imu_cdr_many
 from rigtools.ingest.mcap_json import _json, decode_accel_batch_json, decode_slow_value_json
 from rigtools.ingest.mcap_payloads import (
     ACCEL_BATCH_FIELDS,
@@ -183,18 +184,34 @@ def _decoder_for(message_encoding: str, schema: SchemaRecord, generic: bool) -> 
         return None
     if message_encoding == "cdr" and enc == "ros2msg":
         if generic:
-            return Decoder("generic", _generic_ros2(schema))
+            decode = _generic_ros2(schema)
+            block = _block_decoder(schema)
+            return Decoder("generic", decode,
+                           decode_many=block.columns if block is not None else None)
         if name in (IMU_SCHEMA_NAME, "sensor_msgs/Imu"):
-            return Decoder("imu", decode_imu_cdr)
+            return Decoder("imu", decode_imu_cdr, decode_many=decode_imu_cdr_many)
         text = schema.data.decode("utf-8", errors="replace")
         fname = ros2_scalar_field(text)
         if fname is None:
             return None
         decode = _generic_ros2(schema)
+        block = _block_decoder(schema)
 
         def scalar(data: Any, _decode: Callable[[Any], Any] = decode,
                    _field: str = fname) -> float:
             return float(getattr(_decode(data), _field))
 
-        return Decoder("scalar", scalar, fname)
+        many = functools.partial(block.scalar_many, field=fname) if block is not None else None
+        return Decoder("scalar", scalar, fname, decode_many=many)
     return None
+
+
+def _block_decoder(schema: SchemaRecord) -> Ros2BlockDecoder | None:
+    """The constant-layout block reader of a ``ros2msg`` schema.
+
+    None when it cannot be built: the channel is then read message by message only.
+    """
+    try:
+        return Ros2BlockDecoder(schema.name, schema.data.decode("utf-8"))
+    except Exception:  # the third-party schema parser: the general path reports it
+        return None

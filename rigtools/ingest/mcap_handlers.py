@@ -35,6 +35,12 @@ AccelBatch channels named alike on several topics are kept apart as ``<channel>@
 a counter that restarts is resynchronised from the stamps
 (:func:`~rigtools.ingest.mcap_timing.resync_counter_restarts`); Imu messages are laid on a
 grid fitted to their stamps (:func:`~rigtools.ingest.mcap_timing.stamp_grid`).
+
+Per-sample ROS 2 streams (one ``sensor_msgs/msg/Imu`` or small message per sample) are read
+a chunk at a time when the chunk's messages share one CDR layout
+(:mod:`rigtools.ingest.mcap_cdr`): :class:`ImuHandler`, :class:`ScalarHandler` and
+:class:`MappedHandler` take the block's fields as arrays and fall back to decoding message by
+message, with the same values, for any chunk that breaks the layout.
 """
 
 from __future__ import annotations

@@ -150,11 +150,17 @@ class Decoder:
     field : str or None
         For ``"scalar"``: the name of the one numeric field.
     decode_many : callable or None
-        ``decode_many(buffer, starts, ends, out=None)``: decode all messages lying at
-        ``buffer[starts[i]:ends[i]]`` at once, or answer None when they are not uniform
-        enough (the caller then decodes them one by one). For ``"batch"``: an
-        :class:`AccelBatchColumns`, whose values go to ``out(m, k)`` when given (see
-        :func:`decode_accel_batches_protobuf`).
+        Decodes all messages lying at ``buffer[starts[i]:ends[i]]`` (one channel's messages
+        of one chunk) at once, or answers None when they are not uniform enough (the caller
+        then decodes them one by one, which gives the same values). For ``"batch"``:
+        ``decode_many(buffer, starts, ends, out=None)`` gives an :class:`AccelBatchColumns`,
+        whose values go to ``out(m, k)`` when given (see
+        :func:`~rigtools.ingest.mcap_protobuf_batch.decode_accel_batches_protobuf`). For
+        ``"imu"``: ``decode_many(buffer, starts, ends)`` gives an
+        :class:`~rigtools.ingest.mcap_cdr.ImuColumns`; for ``"scalar"`` a float64 array of
+        the field; for a ROS 2 ``"generic"`` decoder ``decode_many(buffer, starts, ends,
+        paths, scalar)`` gives a :class:`~rigtools.ingest.mcap_cdr.Ros2Columns` (see
+        :mod:`rigtools.ingest.mcap_cdr`).
     """
 
     kind: Literal["batch", "slow", "imu", "scalar", "generic"]

@@ -11,7 +11,9 @@ from typing import Any
 import numpy as np
 
 from rigtools.errors import MappingError
+from rigtools.ingest.builder import MAX_CLOCK_POINTS
 from rigtools.ingest.layout import SlowSpec, UniformSpec
+from rigtools.ingest.mcap_cdr import ImuColumns, Ros2Columns
 from rigtools.ingest.mcap_decoders import Decoder, get_field, message_stamp_ns
 from rigtools.ingest.mcap_handler_base import (
     DecodingHandler,
@@ -31,6 +33,54 @@ __all__ = [
 ]
 
 
+class _Slabs:
+    """A 1-D array appended to block by block, in slabs (one allocation per many blocks).
+
+    A per-sample stream hands on a few thousand samples per chunk; gathering them in slabs of
+    :data:`_SLAB` values instead of one small array per chunk keeps the heap from fragmenting
+    (the peak resident set stays near what the arrays hold). The first slab is smaller when
+    the first block is (16 blocks' worth, at least :data:`_MIN_SLAB`): short files stay small.
+    """
+
+    def __init__(self, dtype: type) -> None:
+        self.dtype = dtype
+        self.full: list[np.ndarray] = []
+        self.cur: np.ndarray | None = None
+        self.used = 0
+        self.n = 0
+
+    def append(self, x: np.ndarray) -> None:
+        """Copy ``x`` (1-D, any strides) to the end."""
+        k = int(x.shape[0])
+        i = 0
+        while i < k:
+            cur = self.cur
+            if cur is None or self.used == cur.shape[0]:
+                if cur is not None:
+                    self.full.append(cur)
+                size = _SLAB if cur is not None else min(_SLAB, max(_MIN_SLAB, 16 * k))
+                cur = self.cur = np.empty(size, self.dtype)
+                self.used = 0
+            take = min(k - i, cur.shape[0] - self.used)
+            cur[self.used : self.used + take] = x[i : i + take]
+            self.used += take
+            i += take
+        self.n += k
+
+    def take(self) -> np.ndarray:
+        """All values as one array (a view of the slab when there is one); empties this."""
+        parts = [*self.full, *([self.cur[: self.used]] if self.cur is not None else [])]
+        self.full, self.cur, self.used, self.n = [], None, 0, 0
+        if not parts:
+            return np.empty(0, self.dtype)
+        return parts[0] if len(parts) == 1 else np.concatenate(parts)
+
+
+#: Values per slab of :class:`_Slabs` (2 MiB of float64), and the least first slab.
+_SLAB = 1 << 18
+_MIN_SLAB = 1 << 12
+
+
 class ImuHandler(DecodingHandler):
     """sensor_msgs/msg/Imu: three channels ``<topic>/linear_acceleration.x|y|z`` (m/s^2).
 
@@ -38,40 +88,72 @@ class ImuHandler(DecodingHandler):
     and each sample's index: :func:`~rigtools.ingest.mcap_timing.stamp_grid` fits a grid
     to them, tolerant of stamp jitter (the message order when no message is missing, a
     fitted grid otherwise), and the rate is the fitted one, snapped to a value of 3
-    significant digits only when within 0.1 %.
+    significant digits only when within 0.1 %. Gaps and duplicates the grid shows are
+    recorded by the builder, never filled.
+
+    A chunk whose Imu messages all have one layout (same length, encapsulation header and
+    ``frame_id`` length) is read at once (:func:`~rigtools.ingest.mcap_cdr.decode_imu_cdr_many`);
+    any other chunk message by message, with the same values.
     """
 
     def __init__(self, ctx: HandlerContext, channel: ChannelRecord, decoder: Decoder) -> None:
         super().__init__(ctx, channel, decoder)
-        self.rows: list[tuple[int, float, float, float]] = []
-        self.log_times: list[int] = []
+        self.decode_many = decoder.decode_many
+        self.stamps = _Slabs(np.int64)  # header stamps (ns)
+        self.axes = (_Slabs(np.float64), _Slabs(np.float64), _Slabs(np.float64))  # x, y, z
+        # uint64 log times (ns), per block: kept only while every header stamp is zero (the
+        # only case they are used in)
+        self.log_times: list[np.ndarray] | None = []
 
     def add(self, block: MessageBlock) -> None:
-        """Collect header stamps and accelerations."""
-        rows, logs = self.rows, self.log_times
-        n0 = len(rows)
+        """Collect header stamps, log times and accelerations (a chunk at once if it can)."""
+        if block.buf is not None and block.start is not None and block.end is not None \
+                and self.decode_many is not None:
+            cols: ImuColumns | None = self.decode_many(block.buf, block.start, block.end)
+            if cols is not None:
+                self._keep(cols.stamp_ns, cols.accel, block.log_time)
+                return
+        stamps: list[int] = []
+        rows: list[tuple[float, float, float]] = []
+        logs: list[int] = []
         for _i, m, sample in self._decoded(block):
-            rows.append(sample)
+            stamps.append(sample[0])
+            rows.append(sample[1:])
             logs.append(m[2])
-        self.ctx.report.decoded += len(rows) - n0
+        if rows:
+            self._keep(np.asarray(stamps, np.int64), np.asarray(rows, np.float64),
+                       np.asarray(logs, np.uint64))
+
+    def _keep(self, stamps: np.ndarray, accel: np.ndarray, log_times: np.ndarray) -> None:
+        self.stamps.append(stamps)
+        for k, axis in enumerate(self.axes):
+            axis.append(accel[:, k])
+        if self.log_times is not None:
+            if np.any(stamps):
+                self.log_times = None
+            else:
+                self.log_times.append(log_times)
+        self.ctx.report.decoded += int(stamps.shape[0])
 
     def finish(self) -> None:
         """Hand the three axes to the builder, on the grid fitted to the stamps."""
-        if not self.rows:
+        if not self.stamps.n:
             return
         topic = self.channel.topic
-        arr = np.asarray(self.rows, np.float64)
-        stamps_ns = np.asarray([r[0] for r in self.rows], np.int64)
-        if not np.any(stamps_ns):
+        stamps_ns = self.stamps.take()
+        n = int(stamps_ns.shape[0])
+        if self.log_times is not None:  # every header stamp is zero
             self.ctx.report.warn(f"topic {topic!r}: Imu header stamps are all zero; the "
                                  "MCAP log times are used instead")
-            stamps_ns = np.asarray(self.log_times, np.uint64).astype(np.int64)
-        t = stamps_ns.astype(np.float64) * 1e-9
+            stamps_ns = np.concatenate(self.log_times).astype(np.int64)
+            self.log_times = None
         grid = stamp_grid(stamps_ns)
         if grid is None:
-            self.ctx.report.reject("no_sample_rate", len(self.rows), f"topic {topic!r}")
+            self.ctx.report.reject("no_sample_rate", n, f"topic {topic!r}")
             self.ctx.report.warn(f"topic {topic!r}: too few distinct Imu stamps to estimate "
                                  "a sample rate; give it in a mapping")
+            for parts in self.axes:
+                parts.take()
             return
         rate = grid.sample_rate_Hz
         how = ("the stamps against the message order (no message missing)"
@@ -84,9 +166,23 @@ class ImuHandler(DecodingHandler):
             self.ctx.report.warn(f"topic {topic!r}: {grid.n_moved} Imu sample(s) jittered into "
                                  "the slot of another and were moved to the free slot beside")
         index = grid.index
-        for k, axis in enumerate("xyz", start=1):
+        if n > MAX_CLOCK_POINTS:
+            # the builder checks the clock on MAX_CLOCK_POINTS stamps picked evenly: picked
+            # here the same way, the rest need not be kept (the result is the same)
+            pick = np.linspace(0, n - 1, MAX_CLOCK_POINTS).astype(np.int64)
+            stamps_ns, stamp_index = stamps_ns[pick], index[pick]
+        else:
+            stamp_index = index
+        t = stamps_ns.astype(np.float64)
+        t *= 1e-9
+        del stamps_ns
+        # samples one after the other (no gap, no duplicate): placed by their first index
+        start: int | np.ndarray = 0 if grid.method == "order" else index
+        del index, grid
+        for axis, parts in zip("xyz", self.axes, strict=True):
+            values = parts.take()
             self.ctx.builder.add_samples(f"{topic}/linear_acceleration.{axis}", "m/s^2", rate,
-                                         index, arr[:, k], stamp_index=index, stamps_s=t)
+                                         start, values, stamp_index=stamp_index, stamps_s=t)
 
 
 class SlowValueHandler(DecodingHandler):
@@ -141,27 +237,43 @@ class ScalarHandler(DecodingHandler):
     """A ROS 2 message with one numeric field: a slow signal named after the topic.
 
     Its time is the MCAP log time; its unit is the channel metadata's ``unit`` (or none).
+    A chunk whose messages share one CDR layout is read at once
+    (:meth:`~rigtools.ingest.mcap_cdr.Ros2BlockDecoder.scalar_many`).
     """
 
     def __init__(self, ctx: HandlerContext, channel: ChannelRecord, decoder: Decoder) -> None:
         super().__init__(ctx, channel, decoder)
-        self.t: list[int] = []
-        self.v: list[float] = []
+        self.decode_many = decoder.decode_many
+        self.t: list[np.ndarray] = []  # log times (ns, uint64), per block
+        self.v: list[np.ndarray] = []  # float64, per block
 
     def add(self, block: MessageBlock) -> None:
         """Collect log times and values."""
+        if block.buf is not None and block.start is not None and block.end is not None \
+                and self.decode_many is not None:
+            values: np.ndarray | None = self.decode_many(block.buf, block.start, block.end)
+            if values is not None:
+                self.v.append(values)
+                self.t.append(block.log_time)
+                self.ctx.report.decoded += int(values.shape[0])
+                return
+        t: list[int] = []
+        v: list[float] = []
         for _i, m, value in self._decoded(block):
-            self.v.append(value)
-            self.t.append(m[2])
-            self.ctx.report.decoded += 1
+            v.append(value)
+            t.append(m[2])
+        if v:
+            self.v.append(np.asarray(v, np.float64))
+            self.t.append(np.asarray(t, np.uint64))
+            self.ctx.report.decoded += len(v)
 
     def finish(self) -> None:
         """Hand the signal to the builder."""
         if self.v:
             unit = self.channel.metadata.get("unit", "")
             self.ctx.builder.add_slow(self.channel.topic, unit,
-                                      np.asarray(self.t, np.float64) * 1e-9,
-                                      np.asarray(self.v, np.float64))
+                                      np.concatenate(self.t).astype(np.float64) * 1e-9,
+                                      np.concatenate(self.v))
 
 
 def _numeric(value: Any) -> np.ndarray | None:
@@ -215,14 +327,41 @@ class MappedHandler(DecodingHandler):
                  specs: list[UniformSpec | SlowSpec]) -> None:
         super().__init__(ctx, channel, decoder)
         self.specs = specs
-        self.stamps: list[int] = []
-        self.cols: list[list[np.ndarray]] = [[] for _ in specs]
+        self.decode_many = decoder.decode_many
+        self.paths = [spec.field or "" for spec in specs]
+        self.scalar = [isinstance(spec, SlowSpec) for spec in specs]
+        self.stamps: list[np.ndarray] = []  # float64 (ns), per block
+        self.cols: list[list[np.ndarray]] = [[] for _ in specs]  # flat float64, per block
+        self.counts: list[list[np.ndarray]] = [[] for _ in specs]  # values per message
         self.tally = [_FieldTally() for _ in specs]
         self.n_payloads = 0
 
     def add(self, block: MessageBlock) -> None:
-        """Collect each mapped field and the message's stamp (header stamp, else log time)."""
-        for i, m, obj in self._decoded(block):
+        """Collect each mapped field and the message's stamp (header stamp, else log time).
+
+        A chunk of ROS 2 messages of one layout is read at once
+        (:meth:`~rigtools.ingest.mcap_cdr.Ros2BlockDecoder.columns`), with the same values.
+        """
+        if block.buf is not None and block.start is not None and block.end is not None \
+                and self.decode_many is not None:
+            cols: Ros2Columns | None = self.decode_many(block.buf, block.start, block.end,
+                                                        self.paths, self.scalar)
+            if cols is not None:
+                m = len(block)
+                self.n_payloads += m
+                for tally in self.tally:
+                    tally.found += m
+                    tally.usable += m
+                when = block.log_time if cols.stamp_ns is None else cols.stamp_ns
+                self.stamps.append(when.astype(np.float64))
+                for col, counts, vals in zip(self.cols, self.counts, cols.values, strict=True):
+                    col.append(vals.reshape(-1))
+                    counts.append(np.full(m, vals.shape[1], np.int64))
+                self.ctx.report.decoded += m
+                return
+        stamps: list[int] = []
+        rows: list[list[np.ndarray]] = [[] for _ in self.specs]
+        for i, m_, obj in self._decoded(block):
             self.n_payloads += 1
             row: list[np.ndarray] = []
             reason = ""
@@ -242,7 +381,7 @@ class MappedHandler(DecodingHandler):
                 tally.usable += 1
                 row.append(arr)
             if reason:
-                where = message_position(block.where, i, m)
+                where = message_position(block.where, i, m_)
                 self.ctx.report.reject(reason, 1, where)
                 self.ctx.warn_once(reason, self.channel.id, f"{self.ctx.path}: topic "
                                    f"{self.channel.topic!r}: a message at {where} lacks a "
@@ -250,10 +389,16 @@ class MappedHandler(DecodingHandler):
                                    f"counted as {reason}")
                 continue
             stamp = message_stamp_ns(obj)
-            self.stamps.append(m[2] if stamp is None else stamp)
-            for col, val in zip(self.cols, row, strict=True):
+            stamps.append(m_[2] if stamp is None else stamp)
+            for col, val in zip(rows, row, strict=True):
                 col.append(val)
             self.ctx.report.decoded += 1
+        if not stamps:
+            return
+        self.stamps.append(np.asarray(stamps, np.float64))
+        for col, counts, arrays in zip(self.cols, self.counts, rows, strict=True):
+            col.append(np.concatenate(arrays))
+            counts.append(np.asarray([a.size for a in arrays], np.int64))
 
     def _check(self) -> None:
         """Refuse a mapping whose field no message of the topic has (or holds usably)."""
@@ -276,8 +421,8 @@ class MappedHandler(DecodingHandler):
         self._check()
         if not self.stamps:
             return
-        t = np.asarray(self.stamps, np.float64) * 1e-9
-        for spec, arrays in zip(self.specs, self.cols, strict=True):
+        t = np.concatenate(self.stamps) * 1e-9
+        for spec, arrays, counts_parts in zip(self.specs, self.cols, self.counts, strict=True):
             unit = spec.unit if spec.unit is not None else self.channel.metadata.get("unit", "")
             with np.errstate(over="ignore", invalid="ignore"):  # Inf kept, counted later
                 values = np.concatenate(arrays) * spec.scale + spec.offset
@@ -285,7 +430,7 @@ class MappedHandler(DecodingHandler):
                 self.ctx.builder.add_slow(spec.name, unit, t, values)
                 continue
             rate = spec.sample_rate_Hz
-            counts = np.asarray([a.size for a in arrays], np.int64)
+            counts = np.concatenate(counts_parts)
             idx0 = indices_from_stamps(t, rate)
             idx0 -= idx0.min()
             starts = np.cumsum(counts) - counts

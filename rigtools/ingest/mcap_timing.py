@@ -46,6 +46,8 @@ DUPLICATE_FRACTION: Final = 0.1
 _ORDER_MAX_OFF: Final = 0.75
 #: A grid fit starts on this many stamps and grows by half each round.
 _FIRST_WINDOW: Final = 32
+#: Slices (samples) in which long stamp series are worked on, to keep temporaries small.
+_SLICE: Final = 1 << 16
 #: A counter step back is a restart only when one of the next this many rows continues the
 #: restarted counter (a single corrupt counter is no restart).
 RESTART_LOOKAHEAD: Final = 8
@@ -239,29 +241,58 @@ def stamp_grid(stamps_ns: np.ndarray) -> StampGrid | None:
     n = s.shape[0]
     if n < 2:
         return None
-    t = (s - s.min()).astype(np.float64)
-    ts_sorted = np.sort(t)
-    d = np.diff(ts_sorted)
-    pos = d[d > 0]
-    if pos.size == 0:
+    smin = s.min()
+    if not s.max() > smin:  # fewer than two distinct stamps
         return None
-    p0 = float(np.median(pos))
+
+    def rel(lo: int, hi: int) -> np.ndarray:
+        """``t = s - min(s)`` as float64 (ns), for samples ``lo .. hi``."""
+        return (s[lo:hi] - smin).astype(np.float64)
+
+    # The no-gap test works a slice at a time on t and i p: a per-sample stream of millions
+    # of messages costs one temporary the size of the stamps (same arithmetic as whole arrays).
     h = n // 2
-    p = float(np.median((t[h:] - t[: n - h]) / h))
+    slope = np.empty(n - h, np.float64)
+    for lo in range(0, n - h, _SLICE):
+        hi = min(n - h, lo + _SLICE)
+        np.subtract(rel(h + lo, h + hi), rel(lo, hi), out=slope[lo:hi])
+    slope /= h
+    p = float(np.median(slope, overwrite_input=True))
+    del slope
     if p > 0.0:
-        i = np.arange(n, dtype=np.float64)
-        a = float(np.median(t - i * p))
-        r = np.abs(t - a - i * p)
+        r = np.empty(n, np.float64)
+        for lo in range(0, n, _SLICE):  # r = t - i p
+            hi = min(n, lo + _SLICE)
+            ip = np.arange(lo, hi, dtype=np.float64)
+            ip *= p
+            np.subtract(rel(lo, hi), ip, out=r[lo:hi])
+        a = float(np.median(r, overwrite_input=True))
+        for lo in range(0, n, _SLICE):  # r = |t - a - i p|
+            hi = min(n, lo + _SLICE)
+            ip = np.arange(lo, hi, dtype=np.float64)
+            ip *= p
+            seg = r[lo:hi]
+            np.subtract(rel(lo, hi), a, out=seg)
+            seg -= ip
+            np.abs(seg, out=seg)
+            del seg
         off = r >= 0.5 * p
         # no gap: no stamp a period off the order's line, and the few half a period off
         # stand alone (a lost or repeated message would shift all the stamps after it)
-        if float(r.max()) < _ORDER_MAX_OFF * p and (
-                not off.any() or (np.count_nonzero(off) <= n // 100
-                                  and not (off[1:] & off[:-1]).any())):
+        in_order = float(r.max()) < _ORDER_MAX_OFF * p and (
+            not off.any() or (np.count_nonzero(off) <= n // 100
+                              and not (off[1:] & off[:-1]).any()))
+        del r, off
+        if in_order:
             fs = 1e9 / p
             return StampGrid(np.arange(n, dtype=np.int64), nominal_rate(fs), fs, "order")
+    t = np.empty(n, np.float64)
+    for lo in range(0, n, _SLICE):
+        t[lo : lo + _SLICE] = rel(lo, lo + _SLICE)
     order = np.argsort(t, kind="stable")
     ts = t[order]
+    d = np.diff(ts)
+    p0 = float(np.median(d[d > 0]))
     p, p_se = _pooled_period(ts, d, p0)
     hi = min(n, _FIRST_WINDOW)
     # the grid's phase from the first window: a circular mean, whatever each stamp's jitter

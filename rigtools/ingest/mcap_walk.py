@@ -8,6 +8,12 @@ record that is not a Message of that length (each record's own length vouches fo
 next one starts, so the guess is checked record by record). Anything else is walked one record
 at a time.
 
+Channels taking turns (one message of each in a fixed order, as loggers of several sensors
+write them) make a pattern of up to :data:`_MAX_PERIOD` records that repeats: when the records
+from a position on are Message records whose lengths repeat with such a period, every further
+period is checked (opcode and length of each of its records) and taken with array operations
+the same way.
+
 A :class:`MessageBlock` holds the messages of one chunk (the chunk's uncompressed data as a
 common buffer, the message header fields as columns), or of a stretch of the data section.
 """
@@ -41,6 +47,9 @@ __all__ = [
 _RUN_PROBE: Final = 16
 #: After a guess that did not pay, this many records are walked one by one before the next.
 _RUN_BACKOFF: Final = 8
+#: Channels taking turns: patterns of up to this many Message records repeating are read with
+#: array operations too.
+_MAX_PERIOD: Final = 8
 
 #: A message as :meth:`MessageBlock.messages` hands it on: (channel_id, sequence, log_time
 #: (ns), publish_time (ns), payload, offset of the payload in its block's buffer, or -1 when
@@ -199,13 +208,20 @@ class ChunkRecordWalk:
                     quiet -= 1
                 elif length >= msize and n - stop >= (run_min - 1) * (stop - pos):
                     k = self._run_length(buf, pos, stop - pos, length)
+                    taken = 0
                     if k >= run_min:
                         if one[0]:
                             cols.append(_columns(one))
                             one = ([], [], [], [], [], [])
                         self._take_run(buf, cpos, pos, stop - pos, k, cols)
-                        n_msg += k
-                        pos += k * (stop - pos)
+                        taken, pos = k, pos + k * (stop - pos)
+                    else:
+                        got = self._pattern_run(buf, cpos, pos, run_min, cols, one)
+                        if got is not None:
+                            one = ([], [], [], [], [], [])
+                            taken, pos = got
+                    if taken:
+                        n_msg += taken
                         continue
                     quiet = _RUN_BACKOFF
                 n_msg += 1
@@ -260,6 +276,104 @@ class ChunkRecordWalk:
             w *= 8
         return k
 
+    def _pattern_run(self, buf: memoryview, cpos: int, pos: int, run_min: int,
+                     cols: list[tuple[np.ndarray, ...]], one: tuple[list[int], ...]
+                     ) -> tuple[int, int] | None:
+        """Read channels taking turns: a pattern of Message records repeating from ``pos``.
+
+        The next records are walked one by one (at most ``2 * _MAX_PERIOD``); when the first
+        ``p`` of them (``2 <= p <= _MAX_PERIOD``) are Message records whose lengths the next
+        ``p`` repeat, every further period is checked with array operations (opcode and
+        length of each of its records: each record's length vouches for where the next one
+        starts) and the periods that pass are taken at once. ``one`` (the messages found
+        one by one so far) is flushed to ``cols`` first.
+
+        Returns
+        -------
+        (int, int) or None
+            Messages taken and the position after them; None when no pattern of at least
+            ``run_min`` messages starts at ``pos`` (nothing is taken then).
+        """
+        n = len(buf)
+        hsize, msize = RECORD_HEADER_BYTES, MESSAGE_HEADER_BYTES
+        unpack_hdr = RECORD_HEADER.unpack_from
+        offs: list[int] = []
+        lens: list[int] = []
+        p = pos
+        while len(offs) < 2 * _MAX_PERIOD and n - p >= hsize:
+            op, length = unpack_hdr(buf, p)
+            if op != OP_MESSAGE or length < msize or length > n - p - hsize:
+                break
+            offs.append(p - pos)
+            lens.append(length)
+            p += hsize + length
+        for period in range(2, len(offs) // 2 + 1):
+            if lens[:period] != lens[period : 2 * period]:
+                continue
+            size = offs[period]
+            k = self._pattern_length(buf, pos, size, offs[:period], lens[:period])
+            if k * period < run_min or k < 2:
+                return None
+            if one[0]:
+                cols.append(_columns(one))
+            self._take_pattern(buf, cpos, pos, size, k, offs[:period], cols)
+            return k * period, pos + k * size
+        return None
+
+    @staticmethod
+    def _pattern_length(buf: memoryview, pos: int, size: int, offs: list[int],
+                        lens: list[int]) -> int:
+        """How many periods of ``size`` bytes from ``pos`` hold the pattern's records."""
+        count = (len(buf) - pos) // size
+        names = [f"{x}{j}" for j in range(len(offs)) for x in ("op", "len")]
+        formats = ["u1", "<u8"] * len(offs)
+        offsets = [o + d for o in offs for d in (0, 1)]
+        dt = np.dtype({"names": names, "formats": formats, "offsets": offsets,
+                       "itemsize": size})
+        k, w = 0, _RUN_PROBE
+        while k < count:
+            m = min(w, count - k)
+            recs = np.frombuffer(buf, dt, m, pos + k * size)
+            ok = np.ones(m, bool)
+            for j, length in enumerate(lens):
+                ok &= recs[f"op{j}"] == OP_MESSAGE
+                ok &= recs[f"len{j}"] == length
+            if not ok.all():
+                return k + int(ok.argmin())
+            k += m
+            w *= 8
+        return k
+
+    def _take_pattern(self, buf: memoryview, cpos: int, pos: int, size: int, k: int,
+                      offs: list[int], cols: list[tuple[np.ndarray, ...]]) -> None:
+        """Columns of ``k`` periods of the pattern's records from ``pos`` (checked).
+
+        In file order. ``offs``: offset of each of the pattern's records in its period.
+        """
+        hdr = RECORD_HEADER_BYTES + MESSAGE_HEADER_BYTES
+        period = len(offs)
+        cid = np.empty((k, period), np.int64)  # (k, period) in row-major order is file order
+        seq = np.empty((k, period), np.int64)
+        lt = np.empty((k, period), np.uint64)
+        pt = np.empty((k, period), np.uint64)
+        start = np.empty((k, period), np.int64)
+        end = np.empty((k, period), np.int64)
+        first = np.arange(k, dtype=np.int64)
+        first *= size
+        first += pos + hdr
+        for j, off in enumerate(offs):
+            # the headers of the pattern's j-th records: size bytes apart, hdr bytes each
+            recs = np.ndarray((k,), _run_dtype(hdr), buf, pos + off, (size,))
+            stop = offs[j + 1] if j + 1 < period else size
+            cid[:, j] = recs["cid"]
+            seq[:, j] = recs["seq"]
+            lt[:, j] = recs["lt"]
+            pt[:, j] = recs["pt"]
+            np.add(first, off, out=start[:, j])
+            np.add(first, stop - hdr, out=end[:, j])
+        self._keep_known(buf, cpos, cid.reshape(-1), seq.reshape(-1), lt.reshape(-1),
+                         pt.reshape(-1), start.reshape(-1), end.reshape(-1), cols)
+
     def _take_run(self, buf: memoryview, cpos: int, pos: int, stride: int, k: int,
                   cols: list[tuple[np.ndarray, ...]]) -> None:
         """Columns of ``k`` Message records ``stride`` bytes apart from ``pos`` (checked)."""
@@ -272,13 +386,20 @@ class ChunkRecordWalk:
         start *= stride
         start += pos + RECORD_HEADER_BYTES + MESSAGE_HEADER_BYTES
         end = start + (stride - RECORD_HEADER_BYTES - MESSAGE_HEADER_BYTES)
+        self._keep_known(buf, cpos, cid, seq, lt, pt, start, end, cols)
+
+    def _keep_known(self, buf: memoryview, cpos: int, cid: np.ndarray, seq: np.ndarray,
+                    lt: np.ndarray, pt: np.ndarray, start: np.ndarray, end: np.ndarray,
+                    cols: list[tuple[np.ndarray, ...]]) -> None:
+        """Add message columns to ``cols``; those of channels not (yet) defined are held."""
+        hdr = RECORD_HEADER_BYTES + MESSAGE_HEADER_BYTES
         unknown = [c for c in np.unique(cid).tolist() if c not in self.channels]
         if unknown:
             later = np.isin(cid, unknown)
             for i in np.flatnonzero(later).tolist():
                 self._defer(int(cid[i]), int(seq[i]), int(lt[i]), int(pt[i]),
                             buf[int(start[i]) : int(end[i])],
-                            f"chunk at byte {cpos} +{pos + i * stride}")
+                            f"chunk at byte {cpos} +{int(start[i]) - hdr}")
             keep = ~later
             cid, seq, lt, pt, start, end = (cid[keep], seq[keep], lt[keep], pt[keep],
                                             start[keep], end[keep])

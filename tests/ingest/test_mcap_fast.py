@@ -2,8 +2,8 @@
 
 * the chunk read ahead in a worker thread (``PIPELINE_MIN_CHUNK_BYTES``) against the walk
   reading every chunk itself;
-* runs of equal Message records read with array operations (``_RUN_MIN``) against the record
-  by record walk;
+* runs of equal Message records, and patterns of channels taking turns, read with array
+  operations (``_RUN_MIN``) against the record by record walk;
 * one-shot zstd decompression against the bounded streaming decompression;
 * the protobuf AccelBatch decoding of messages sharing one byte layout against message by
   message decoding and the protobuf library.
@@ -280,6 +280,48 @@ def test_long_runs_broken_anywhere(n):
         runs = [(("m", 1, 40), brk), (("m", 2, 41), 1), (("m", 1, 40), n - brk)]
         data = _file(_inner(runs), before=_schema_channels([1, 2]))
         assert _scan(data, runs=True) == _scan(data, runs=False)
+
+
+# channels taking turns: one period of ("m", cid, payload length) messages, repeated
+_period = st.lists(st.tuples(st.just("m"), st.sampled_from([1, 2, 3, 9]),
+                             st.sampled_from([0, 5, 40, 41, 97])), min_size=2, max_size=9)
+
+
+@settings(max_examples=150, deadline=None)
+@given(_period, st.integers(1, 60), st.lists(st.tuples(_item, st.integers(1, 3)), max_size=3),
+       st.integers(0, 200), st.sampled_from([b"", b"\x05\x00", _HDR.pack(0x05, 10**6)]))
+def test_channels_taking_turns_equal_the_record_by_record_walk(period, reps, breaks, at, tail):
+    """Patterns of 2 to 9 records repeating, broken anywhere, give what the walk gives.
+
+    9 is past the longest period read at once; the breaks are other records, and channels
+    are defined late or never.
+    """
+    runs = [(item, 1) for item in period] * reps
+    at = min(at, len(runs))
+    runs = runs[:at] + breaks + runs[at:]
+    data = _file(_inner(runs, tail), before=_schema_channels([1, 2]))
+    assert _scan(data, runs=True) == _scan(data, runs=False)
+
+
+@pytest.mark.parametrize("p", [2, 3, 8])
+def test_channels_taking_turns_are_read_as_patterns(p, monkeypatch):
+    """The pattern path really takes the records (no record walked one by one after it)."""
+    from rigtools.ingest import mcap_walk
+
+    period = [("m", 1 + (j % 2), 40 + j) for j in range(p)]
+    data = _file(_inner([(item, 1) for item in period] * 50), before=_schema_channels([1, 2]))
+    taken = []
+    orig = mcap_walk.ChunkRecordWalk._take_pattern
+
+    def spy(self, buf, cpos, pos, size, k, offs, cols):
+        taken.append(k * len(offs))
+        return orig(self, buf, cpos, pos, size, k, offs, cols)
+
+    monkeypatch.setattr(mcap_walk.ChunkRecordWalk, "_take_pattern", spy)
+    got = _scan(data, runs=True)
+    assert taken == [50 * p]
+    monkeypatch.setattr(mcap_walk.ChunkRecordWalk, "_take_pattern", orig)
+    assert got == _scan(data, runs=False)
 
 
 def test_messages_before_their_channel_in_a_run_are_held_as_in_the_walk():
