@@ -40,14 +40,17 @@ from models.dynamics.integrate import (
     periods_solve_ivp,
     settle,
     settle_periodic,
+    static_pair_count,
 )
 from models.dynamics.itms import ITMSModel, itms_from_mesh_cycle
 from models.dynamics.parallel import SweepJob, sweep_many
 from models.dynamics.sdof import (
+    BACK_FLANKS,
     MODELS,
     DynamicModel,
     PeriodicCurve,
     SDOFModel,
+    back_flank_offset,
     dead_zone,
     dead_zone_potential,
     fvms_error_curve,
@@ -109,6 +112,7 @@ from models.dynamics.two_stage_maps import (
 )
 
 __all__ = [
+    "BACK_FLANKS",
     "MAX_PERIOD",
     "MAX_STEP_OMEGA",
     "MODELS",
@@ -136,6 +140,7 @@ __all__ = [
     "TwoStageModel",
     "TwoStageResponse",
     "TwoStageThermalSetup",
+    "back_flank_offset",
     "bifurcation_over_frequency",
     "bifurcation_over_temperature",
     "build_tribo_dynamics",
@@ -166,6 +171,7 @@ __all__ = [
     "six_state_reference",
     "solve_tribo_case",
     "solve_tribo_dynamics",
+    "static_pair_count",
     "static_state",
     "steady_state",
     "sweep",

@@ -10,7 +10,21 @@ The models of :mod:`models.dynamics.sdof` run in ``tau = omega_n t`` and ``x = D
     f_m = \frac{\Lambda \omega_n}{2 \pi} \ (\mathrm{Hz}), \qquad
     n_1 = \frac{60 f_m}{z_1} \ (\mathrm{rpm}), \qquad \mathrm{DTE} = L x ,
 
-with ``R_i`` the base radii, ``k_0`` the model's mean stiffness and ``L`` its length scale. The
+with ``R_i`` the base radii, ``k_0`` the model's reference stiffness (``mean_stiffness_N_m``)
+and ``L`` its length scale.
+
+Which ``k_0``: by default (:func:`~models.dynamics.sdof.sdof_from_mesh_cycle`,
+``reference_stiffness="model"``, seed Eqs. 27, 30, 31) each model's own mean stiffness. For the
+VVMS and LSTE models that is a secant stiffness of the loaded static transmission error, which
+holds the profile errors (seed Eq. 20b as written): on the Kahraman pair at 340 N m a rigid
+5 um error on every pair makes ``k_0`` 25 % softer (3.26e8 -> 2.43e8 N/m), tip relief
+``Delta = 1`` 44 % softer (1.83e8 N/m, ``omega_n`` -25 %), while the FVMS and ITMS models keep
+the error-free mean FVMS (2.99e8 N/m). ``omega_n`` -- hence the Hz and rpm of a given
+``Lambda`` -- then differs between models and with relief and load; to compare models on one
+axis build them with ``reference_stiffness="fvms"`` (or a given ``k_0``). The
+``damping_N_s_m`` follows the same ``k_0``.
+
+The
 gear inertias default to solid discs of the reference (pitch) diameter and the face width
 (``J = rho b pi r^4 / 2``, less a bore when the gear has one) -- the gear body alone; a test
 rig adds shafts and hubs, so pass measured ``J_1``, ``J_2`` when known (the natural frequency
@@ -77,7 +91,8 @@ class DimensionalScaling:
     omega_n_rad_s : float
         ``sqrt(k_0 / m)``.
     mean_stiffness_N_m : float
-        ``k_0``.
+        ``k_0``, the model's reference stiffness (module notes: for VVMS / LSTE by default a
+        secant stiffness that holds the profile errors).
     damping_N_s_m : float
         ``c = 2 zeta m omega_n``.
     length_scale_m : float

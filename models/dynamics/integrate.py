@@ -10,8 +10,9 @@ costs a few multiplications, no cosine. The classical RK4 stages are
 
 with ``g`` the right-hand side ``x'' = F - 2 zeta x' - sum_j [kd_j max(x - ed_j - b, 0) +
 kb_j min(x - eb_j + b, 0)]``: one tooth-pair column ``j`` per pair (ITMS, seed 003 Eq. 28), or
-a single column with ``kd = kb = k`` and ``ed = eb = e`` (FVMS / VVMS / LSTE, Eqs. 26, 30, 31),
-which is the dead zone ``k f(x - e)`` of :func:`~models.dynamics.sdof.dead_zone`.
+a single column with ``kd = kb = k``, ``ed = e`` and ``eb = e_b`` (FVMS / VVMS / LSTE, Eqs. 26,
+30, 31), which for ``e_b = e`` is the dead zone ``k f(x - e)`` of
+:func:`~models.dynamics.sdof.dead_zone`.
 
 The dead zone has a kink, so near contact loss the scheme is locally first order in the kink
 crossings; ``N = 128`` per mesh period keeps the Arms within 1 % of an adaptive RK45 at rtol
@@ -21,16 +22,39 @@ check.
 
 Steady state (:func:`settle_periodic`): whole periods are run until the Poincare point (the
 state at phase 0) repeats with some period ``n`` in 1..8, i.e. ``max(|dx|, |dx'|)`` between
-the points ``n`` periods apart is below ``tol`` three times running; the smallest such ``n``
-is the period, provided (for ``n > 1``) the distances ``|P_k - P_(k-d)|`` for the divisors
-``d < n`` of ``n`` have stopped shrinking -- otherwise a period-``d`` response still
-converging, whose transient turns by about ``2 pi d / n`` per ``d`` periods, would pass for
-period ``n`` (the guard needs the transient to decay by more than 2 % per ``n`` periods,
-roughly ``zeta n / Lambda > 0.003``) -- and differ by more than ``100 tol`` (a period-``n``
-orbit split by less, just past a period doubling, runs to ``max_periods`` and is reported
-aperiodic: not resolved at that tolerance). A period-2 response therefore settles as quickly
-as a period-1 one; a quasi-periodic or chaotic response never does, runs ``max_periods`` and
-is reported with period 0 ("aperiodic").
+the points ``n`` periods apart (the *repeat distance* ``D``) is below ``tol`` three times
+running; the smallest such ``n`` is the period. For ``n > 1`` a period-``d`` response still
+converging (``d`` a proper divisor of ``n``), whose transient turns by about ``2 pi d / n`` per
+``d`` periods or, near a flip bifurcation, changes sign every period, also passes that test;
+two guards on the *split* ``s = |P_k - P_(k-d)|`` reject it:
+
+1. **resolution**: ``s >= 100 tol`` (``_MIN_SPLIT``): a period-``n`` orbit split by less is not
+   resolved at that tolerance;
+2. **extrapolation**: ``s > 2 B`` with ``B = 2 D q / (1 - q)``, ``q = D_k / D_(k-n)`` the
+   measured contraction of the repeat distance per ``n`` periods (``B`` infinite if ``q >= 1``,
+   0 once ``D`` is at round-off): ``B`` bounds how much the split can still shrink if the
+   transient keeps decaying geometrically, so a split that the transient itself will remove
+   (a converging period-``d`` response has ``s ~ D / (1 - q)``) is not taken for a period-``n``
+   orbit, however slowly it decays.
+
+(A guard that only compared the split with its value ``n`` periods earlier is implied by the
+resolution guard: ``D < tol`` at both ends changes ``s`` by less than ``2 tol <= 0.02 s``.)
+
+``period`` is then ``n``; 0 when no ``n <= 8`` repeats within ``tol`` at ``max_periods``
+(quasi-periodic, chaotic, or not settled); ``-n`` ("unresolved") when the points repeat
+every ``n`` periods within ``tol`` but a guard still rejects the period at ``max_periods``: a
+period-``n`` orbit split by less than ``100 tol`` (resolve it with a smaller ``tol``), or a
+period-``d`` response converging too slowly to tell (a longer run decides).
+
+Error of a settled state: the test is period-to-period, so with a slowest Floquet multiplier
+``mu`` (per period of the response) the distance of the last point from the true periodic orbit
+is about ``tol / (1 - |mu|)``, not ``tol``: lightly damped responses (``|mu|`` close to 1, e.g.
+``1 - |mu| ~ 2 pi zeta / Lambda`` in the linear range) need a ``tol`` smaller by that factor.
+
+Contact flags of the recorded periods (:func:`sweep_kernel`): each RK4 step is checked on the
+cubic Hermite interpolant of ``x`` between its end points (values and slopes, third order),
+minimised exactly against the offsets interpolated linearly between the half steps, so a
+contact loss or impact shorter than a step is not missed.
 
 The compiled sweep kernel :func:`sweep_kernel` (used by :func:`models.dynamics.sweep.sweep`
 and, in parallel over sweeps, by :func:`models.dynamics.parallel.sweep_many`) does settle,
@@ -59,6 +83,7 @@ __all__ = [
     "periods_solve_ivp",
     "settle",
     "settle_periodic",
+    "static_pair_count",
     "sweep_kernel",
     "sweep_many_kernel",
 ]
@@ -68,8 +93,11 @@ MAX_PERIOD: Final = 8
 #: Poincare points kept per steady state (the last ones, in time order).
 POINCARE_POINTS: Final = 16
 _REPEATS: Final = 3
-_SPREAD_RATIO: Final = 0.98
 _MIN_SPLIT: Final = 100.0
+_EXTRAPOLATION_MARGIN: Final = 2.0
+_ROUND_OFF: Final = 1e-13
+#: Poincare points held while settling (enough for the guards of period 8: 2 * 8 + 3).
+_RING: Final = 32
 
 
 @dataclass(frozen=True)
@@ -89,6 +117,10 @@ class TableSet:
         ``(3, N)`` ``cos(2 pi k j / N)``, ``sin(...)``, ``k = 1..3``: the DFT of the mesh
         harmonics.
     steps_per_period : int
+    static_pairs : numpy.ndarray
+        ``(2 N,)`` number of pairs carrying load in the quasi-static drive-side solution
+        (:func:`static_pair_count`); a sample with fewer pairs touching, but at least one, is a
+        partial contact loss.
     """
 
     kd: np.ndarray
@@ -100,6 +132,7 @@ class TableSet:
     cos: np.ndarray
     sin: np.ndarray
     steps_per_period: int
+    static_pairs: np.ndarray
 
 
 def model_tables(model: DynamicModel, steps_per_period: int) -> TableSet:
@@ -125,7 +158,33 @@ def model_tables(model: DynamicModel, steps_per_period: int) -> TableSet:
         np.ascontiguousarray(np.cos(arg)),
         np.ascontiguousarray(np.sin(arg)),
         n,
+        static_pair_count(kd, ed, float(model.force)),
     )
+
+
+def static_pair_count(kd: np.ndarray, ed: np.ndarray, force: float) -> np.ndarray:
+    """Pairs carrying load in the quasi-static solution of ``sum_j kd_j max(y - ed_j, 0) = F``.
+
+    Per row of the ``(rows, P)`` tables, ``y = x - b``; a pair carries load where
+    ``y - ed_j > 1e-12 max(1, |y|)``. Rows with no stiffness, or ``F <= 0``, count 0.
+    """
+    kd = np.asarray(kd, dtype=float)
+    ed = np.asarray(ed, dtype=float)
+    out = np.zeros(kd.shape[0], dtype=np.int64)
+    if not force > 0:
+        return out
+    for i in range(kd.shape[0]):
+        on = kd[i] > 0
+        if not on.any():
+            continue
+        k, g = kd[i][on], ed[i][on]
+        o = np.argsort(g)
+        k, g = k[o], g[o]
+        y = (force + np.cumsum(k * g)) / np.cumsum(k)
+        nxt = np.append(g[1:], np.inf)
+        yy = y[int(np.argmax(y <= nxt))]
+        out[i] = int(np.sum(yy - g > 1e-12 * max(1.0, abs(yy))))
+    return out
 
 
 # --- compiled kernels ---------------------------------------------------------------------------
@@ -190,15 +249,31 @@ def _dist(ring, a, c):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _period_of(ring, count, tol):  # pragma: no cover - compiled
+def _split_resolved(ring, a, n, d, tol):  # pragma: no cover - compiled
+    """The two guards on the split ``s = |P_a - P_(a-d)|`` of a period-``n`` candidate."""
+    split = _dist(ring, a, a - d)
+    if split < _MIN_SPLIT * tol:
+        return False
+    dn = _dist(ring, a, a - n)
+    dp = _dist(ring, a - n, a - 2 * n)
+    m = ring.shape[0]
+    scale = max(1.0, abs(ring[a % m, 0]), abs(ring[a % m, 1]))
+    if dp <= _ROUND_OFF * scale:
+        bound = dn  # converged to round-off
+    elif dn >= dp:
+        return False  # the repeat distance is not contracting: no bound
+    else:
+        q = dn / dp
+        bound = 2.0 * dn * q / (1.0 - q)
+    return split > _EXTRAPOLATION_MARGIN * bound
+
+
+@njit(cache=True)
+def _period_of(ring, count, tol, guarded):  # pragma: no cover - compiled
     """Smallest n in 1..MAX_PERIOD with the last 3 points n apart within tol, else 0.
 
-    For ``n > 1`` the distances ``|P_k - P_(k-d)|`` for the proper divisors ``d`` of ``n``
-    must also have stopped shrinking (each ``>= SPREAD_RATIO`` of its value ``n`` periods
-    earlier) and exceed ``MIN_SPLIT * tol``: a period-``d`` response still converging, with a
-    transient that turns by about ``2 pi d / n`` per ``d`` periods (or, near a flip
-    bifurcation, changes sign every period and decays slowly), passes the distance test for
-    ``n``, but its period-``d`` distances decay, or are tiny.
+    With ``guarded``, for ``n > 1`` the split to every proper divisor ``d`` must pass
+    :func:`_split_resolved` (see the module notes); without, the distance test alone.
     """
     for n in range(1, MAX_PERIOD + 1):
         if count - 2 * n - _REPEATS + 1 < 0:
@@ -209,13 +284,10 @@ def _period_of(ring, count, tol):  # pragma: no cover - compiled
             if not _dist(ring, a, a - n) < tol:
                 ok = False
                 break
+            if not guarded:
+                continue
             for d in range(1, n):
-                if n % d != 0:
-                    continue
-                split = _dist(ring, a, a - d)
-                if split < _MIN_SPLIT * tol or split < _SPREAD_RATIO * _dist(
-                    ring, a - n, a - n - d
-                ):
+                if n % d == 0 and not _split_resolved(ring, a, n, d, tol):
                     ok = False
                     break
             if not ok:
@@ -229,7 +301,10 @@ def _period_of(ring, count, tol):  # pragma: no cover - compiled
 def _settle(
     x, v, zeta, force, b, kd, ed, kb, eb, h, tol, min_periods, max_periods, ring
 ):  # pragma: no cover - compiled
-    """Run periods until period-n repetition; ``ring`` holds Poincare points by count mod m."""
+    """Run periods until period-n repetition; ``ring`` holds Poincare points by count mod m.
+
+    Returns ``(x, v, periods run, period)``, period ``-n`` when unresolved at the cap.
+    """
     n = kd.shape[0] // 2
     m = ring.shape[0]
     for i in range(m):
@@ -246,10 +321,56 @@ def _settle(
         ring[count % m, 0] = x
         ring[count % m, 1] = v
         if count >= min_periods:
-            period = _period_of(ring, count, tol)
+            period = _period_of(ring, count, tol, True)
             if period > 0:
                 break
+    if period == 0:
+        period = -_period_of(ring, count, tol, False)
     return x, v, count, period
+
+
+@njit(cache=True)
+def _min_below(x0, v0, x1, v1, h, o0, o1, o2):  # pragma: no cover - compiled
+    """Minimum over one step of ``H(t) - o(t)``: ``H`` the cubic Hermite interpolant of ``x``.
+
+    ``t`` in [0, 1] over the step; ``o`` linear through ``o0``, ``o1``, ``o2`` at 0, 1/2, 1.
+    """
+    lo = min(x0 - o0, x1 - o2)
+    if not (math.isfinite(o0) and math.isfinite(o1) and math.isfinite(o2)):
+        return lo  # no pair on this side (offset +-inf)
+    c3 = 2.0 * (x0 - x1) + h * (v0 + v1)
+    c2 = 3.0 * (x1 - x0) - h * (2.0 * v0 + v1)
+    c1 = h * v0
+    for half in range(2):
+        t0 = 0.5 * half
+        oa = o0 if half == 0 else o1
+        ob = o1 if half == 0 else o2
+        slope = 2.0 * (ob - oa)  # d o / d t on this half
+        # g'(t) = 3 c3 t^2 + 2 c2 t + c1 - slope
+        qa = 3.0 * c3
+        qb = 2.0 * c2
+        qc = c1 - slope
+        roots = np.empty(2)
+        nr = 0
+        if abs(qa) > 1e-300:
+            disc = qb * qb - 4.0 * qa * qc
+            if disc >= 0.0:
+                sq = math.sqrt(disc)
+                roots[0] = (-qb - sq) / (2.0 * qa)
+                roots[1] = (-qb + sq) / (2.0 * qa)
+                nr = 2
+        elif abs(qb) > 1e-300:
+            roots[0] = -qc / qb
+            nr = 1
+        for r in range(nr):
+            t = roots[r]
+            if t0 < t < t0 + 0.5:
+                xt = ((c3 * t + c2) * t + c1) * t + x0
+                ot = oa + slope * (t - t0)
+                lo = min(lo, xt - ot)
+        xm = ((c3 * 0.5 + c2) * 0.5 + c1) * 0.5 + x0
+        lo = min(lo, xm - o1)
+    return lo
 
 
 @njit(cache=True)
@@ -265,6 +386,7 @@ def _steady(
     eb,
     doff,
     boff,
+    npair,
     cs,
     sn,
     h,
@@ -276,8 +398,13 @@ def _steady(
     poinc,
     amps,
 ):  # pragma: no cover - compiled
-    """Settle, then record; fills ``poinc`` (POINCARE_POINTS, 2) and ``amps`` (3,)."""
+    """Settle, then record; fills ``poinc`` (POINCARE_POINTS, 2) and ``amps`` (3,).
+
+    Returns ``(x, v, periods to settle, period, mean, loss, impact, partial)``, ``partial``
+    the fraction of recorded step starts with ``0 < touching pairs < npair``.
+    """
     n = kd.shape[0] // 2
+    n2 = 2 * n
     m = ring.shape[0]
     x, v, count, period = _settle(
         x, v, zeta, force, b, kd, ed, kb, eb, h, tol, min_periods, max_periods, ring
@@ -294,8 +421,15 @@ def _steady(
     total = 0.0
     loss = False
     impact = False
+    partial = 0
     for _ in range(rec):
         for j in range(n):
+            touching = 0
+            for p in range(kd.shape[1]):
+                if kd[2 * j, p] > 0.0 and x - ed[2 * j, p] > b:
+                    touching += 1
+            if 0 < touching < npair[2 * j]:
+                partial += 1
             total += x
             c1 += x * cs[0, j]
             c2 += x * cs[1, j]
@@ -303,11 +437,18 @@ def _steady(
             s1 += x * sn[0, j]
             s2 += x * sn[1, j]
             s3 += x * sn[2, j]
-            if x - doff[2 * j] < b:
-                loss = True
-            if x - boff[2 * j] < -b:
-                impact = True
-            x, v = _step(x, v, j, zeta, force, b, kd, ed, kb, eb, h)
+            xn, vn = _step(x, v, j, zeta, force, b, kd, ed, kb, eb, h)
+            j0 = 2 * j
+            j2 = (j0 + 2) % n2
+            if not loss:
+                # drive side: no pair touches where x - drive offset < b
+                if _min_below(x, v, xn, vn, h, doff[j0], doff[j0 + 1], doff[j2]) < b:
+                    loss = True
+            if not impact:
+                # back side: x - back offset < -b
+                if _min_below(x, v, xn, vn, h, boff[j0], boff[j0 + 1], boff[j2]) < -b:
+                    impact = True
+            x, v = xn, vn
         count += 1
         ring[count % m, 0] = x
         ring[count % m, 1] = v
@@ -315,11 +456,12 @@ def _steady(
     amps[0] = 2.0 * math.sqrt(c1 * c1 + s1 * s1) / size
     amps[1] = 2.0 * math.sqrt(c2 * c2 + s2 * s2) / size
     amps[2] = 2.0 * math.sqrt(c3 * c3 + s3 * s3) / size
-    for i in range(m):  # oldest first
-        k = (count + 1 + i) % m
-        poinc[i, 0] = ring[k, 0]
-        poinc[i, 1] = ring[k, 1]
-    return x, v, count - rec, period, total / size, loss, impact
+    k = poinc.shape[0]
+    for i in range(k):  # oldest first
+        c = (count - k + 1 + i) % m
+        poinc[i, 0] = ring[c, 0]
+        poinc[i, 1] = ring[c, 1]
+    return x, v, count - rec, period, total / size, loss, impact, partial / size
 
 
 @njit(cache=True)
@@ -335,6 +477,7 @@ def sweep_kernel(
     eb,
     doff,
     boff,
+    npair,
     cs,
     sn,
     freqs,
@@ -346,6 +489,7 @@ def sweep_kernel(
     mean,
     loss,
     impact,
+    partial,
     periods_run,
     period,
     poinc,
@@ -354,16 +498,17 @@ def sweep_kernel(
     """One sweep in the order of ``freqs``, carrying the state; fills the output arrays.
 
     Outputs (first axis the sweep point): ``amps (M, 3)``, ``mean (M,)``, ``loss``/``impact``
-    ``(M,)`` bool, ``periods_run``/``period`` ``(M,)`` int, ``poinc (M, POINCARE_POINTS, 2)``,
-    ``entry (M, 2)`` the state each point started from. Returns the final state.
+    ``(M,)`` bool, ``partial (M,)`` fraction, ``periods_run``/``period`` ``(M,)`` int,
+    ``poinc (M, POINCARE_POINTS, 2)``, ``entry (M, 2)`` the state each point started from.
+    Returns the final state.
     """
     n = kd.shape[0] // 2
-    ring = np.empty((POINCARE_POINTS, 2))
+    ring = np.empty((_RING, 2))
     for i in range(freqs.size):
         entry[i, 0] = x
         entry[i, 1] = v
         h = 2.0 * math.pi / (freqs[i] * n)
-        x, v, cnt, per, mu, lo, im = _steady(
+        x, v, cnt, per, mu, lo, im, pa = _steady(
             x,
             v,
             zeta,
@@ -375,6 +520,7 @@ def sweep_kernel(
             eb,
             doff,
             boff,
+            npair,
             cs,
             sn,
             h,
@@ -389,6 +535,7 @@ def sweep_kernel(
         mean[i] = mu
         loss[i] = lo
         impact[i] = im
+        partial[i] = pa
         periods_run[i] = cnt
         period[i] = per
     return x, v
@@ -407,6 +554,7 @@ def sweep_many_kernel(
     eb,
     doff,
     boff,
+    npair,
     cs,
     sn,
     freqs,
@@ -418,6 +566,7 @@ def sweep_many_kernel(
     mean,
     loss,
     impact,
+    partial,
     periods_run,
     period,
     poinc,
@@ -440,6 +589,7 @@ def sweep_many_kernel(
             eb[s],
             doff[s],
             boff[s],
+            npair[s],
             cs,
             sn,
             freqs[s],
@@ -451,6 +601,7 @@ def sweep_many_kernel(
             mean[s],
             loss[s],
             impact[s],
+            partial[s],
             periods_run[s],
             period[s],
             poinc[s],
@@ -515,8 +666,11 @@ class Settled:
     periods_run : int
         Mesh periods run.
     period : int
-        Detected period in mesh periods (1..8), 0 when none was found (aperiodic:
-        quasi-periodic or chaotic, or not yet settled at ``max_periods``).
+        Detected period in mesh periods (1..8); 0 when no ``n <= 8`` repeats within ``tol``
+        at ``max_periods`` (aperiodic: quasi-periodic or chaotic, or not yet settled); ``-n``
+        when the points repeat every ``n`` periods within ``tol`` but the period could not be
+        confirmed (unresolved: a split below ``100 tol``, or a transient too slow to tell; see
+        the module notes).
     poincare : numpy.ndarray
         ``(k, 2)`` the last ``k = min(POINCARE_POINTS, periods_run + 1)`` Poincare points,
         oldest first.
@@ -531,6 +685,11 @@ class Settled:
     def converged(self) -> bool:
         """Whether a period 1..8 was detected."""
         return self.period > 0
+
+    @property
+    def unresolved(self) -> bool:
+        """Whether the points repeat within ``tol`` but the period was not confirmed."""
+        return self.period < 0
 
 
 def _check_settle_args(tol: float, min_periods: int, max_periods: int) -> None:
@@ -555,13 +714,16 @@ def settle_periodic(
     """Run whole periods until the Poincare point repeats with a period ``n <= 8``.
 
     ``max(|dx|, |dx'|)`` (units of ``L``) between the Poincare points ``n`` periods apart below
-    ``tol`` for three consecutive periods; the smallest such ``n`` is the period. At least
-    ``min_periods``, at most ``max_periods`` periods.
+    ``tol`` for three consecutive periods; the smallest such ``n`` that passes the guards of
+    the module notes is the period (``-n`` if only unguarded repetition is found at
+    ``max_periods``, 0 if none). At least ``min_periods``, at most ``max_periods`` periods.
+    The settled state is within about ``tol / (1 - |mu|)`` of the periodic orbit (``mu`` the
+    slowest Floquet multiplier), not ``tol``.
     """
     _check_settle_args(tol, min_periods, max_periods)
     t = model_tables(model, steps_per_period)
     h = _step_size(frequency, t.steps_per_period)
-    ring = np.empty((POINCARE_POINTS, 2))
+    ring = np.empty((_RING, 2))
     x, v, n, per = _settle(
         float(y0[0]),
         float(y0[1]),
@@ -579,7 +741,7 @@ def settle_periodic(
         ring,
     )
     k = min(POINCARE_POINTS, int(n) + 1)
-    idx = (np.arange(int(n) - k + 1, int(n) + 1)) % POINCARE_POINTS
+    idx = (np.arange(int(n) - k + 1, int(n) + 1)) % _RING
     return Settled((float(x), float(v)), int(n), int(per), ring[idx].copy())
 
 

@@ -15,19 +15,30 @@ pair's drive-side *gap* is its profile error plus its corner-contact separation 
 .. math::
 
     f_j(x) = \max(x - \tilde b - \tilde g_j, 0)
-             + \chi_j \min(x + \tilde b - \tilde e_j, 0)
+             + \chi_j \min(x + \tilde b - \tilde e_{b,j}, 0)
 
 * drive side: corner contact and tip relief enter through ``g_j``; a pair that cannot touch
   (infinite separation) has ``K_j = 0``;
-* back side (``chi_j = 1`` on the theoretical path AE only, with the pair's profile error
-  ``e_j``): the back flanks are taken as the mirror of the drive flanks without corner contact
-  -- the seed gives no back-side geometry (its Eq. 28 uses the same ``k_j``, ``e_j``).
+* back side (``chi_j = 1`` on the theoretical path AE only, no corner contact): the seed gives
+  no back-side geometry, so the back-side offset ``e_b`` is a choice (``back_flank``,
+  :func:`~models.dynamics.sdof.back_flank_offset`): ``"unmodified"`` (default) perfect back
+  involutes, ``e_b = 0`` -- the relief of the mesh cycle is ground on the drive flanks;
+  ``"mirror"`` the same relief on the back flanks, ``e_b = -e_j`` (a relieved back flank
+  touches at ``x < -b - e_j``, later, as a relieved drive flank does); ``"seed"`` Eq. 28
+  literally, ``e_b = +e_j``, the displacement-error convention in which drive-flank relief
+  *narrows* the back gap (with ``Delta = 1`` back contact then starts at ``x = -0.62 b``
+  instead of ``-b``). The back flanks are taken at the drive-side roll positions with the
+  drive-side pair compliance: the back-side line of action of a symmetric spur pair carries
+  the same sequence of pair stiffnesses, shifted in phase, which this SDOF model does not
+  resolve (as Kahraman-Singh, one stiffness curve for both sides).
 
 Consequences (tested): the quasi-static solution is the LSTE of the static analysis,
 ``x - b = x_s(tau) / L`` at every phase; with a common error ``e`` for all pairs and no corner
-contact it *is* the FVMS model ``k_F f(x - e)`` (Eq. 26), because the sum of the pair springs
-is ``k_F``. Partial contact loss (some pairs separate, others still touch) is what this model
-adds over the FVMS, VVMS and LSTE models.
+contact it *is* the FVMS model of the same back flank (``error="cycle"``; Eq. 26, ``k_F f(x -
+e)`` for ``"seed"``), because the sum of the pair springs is ``k_F``. Partial contact loss
+(some pairs separate, others still touch) is what this model adds over the FVMS, VVMS and LSTE
+models; sweeps report it as the fraction of the record
+(:attr:`~models.dynamics.sweep.SweepResult.partial_contact_loss`).
 
 Scaling: ``k_0`` is the mean FVMS (Eq. 27, ``k_F0``), ``L`` the half backlash by default,
 ``tilde F = F / (k_0 L)``. The per-pair curves are those of a :class:`MeshCycle`, stitched into
@@ -48,6 +59,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from models.dynamics.sdof import BackFlank, back_flank_offset
 from models.errors import ModelError
 from models.stiffness.mesh_cycle import MeshCycle
 
@@ -70,7 +82,7 @@ class ITMSModel:
         Passage coordinate ``sigma = (s - A) / p_b`` of the samples (-), increasing, uniform.
     drive_stiffness, drive_gap, back_stiffness, back_error : numpy.ndarray
         Per sample of the passage: ``K / k_0`` (0 where the pair cannot touch), ``g / L``,
-        ``K / k_0`` on AE (else 0), ``e / L`` (-).
+        ``K / k_0`` on AE (else 0), the back-side offset ``e_b / L`` (-).
     slot_offsets : numpy.ndarray
         The slots ``m``: at cycle phase ``tau`` the pairs sit at ``sigma = tau + m``.
     length_scale_m : float
@@ -110,7 +122,7 @@ class ITMSModel:
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``(kd, ed, kb, eb)`` at the ``2 N`` half steps, one column per slot.
 
-        ``ed = b``-free drive offset ``g_j`` (the kernel adds ``b``), ``eb = e_j``.
+        ``ed = b``-free drive offset ``g_j`` (the kernel adds ``b``), ``eb`` the back offset.
         """
         phase = np.arange(2 * steps_per_period) / (2 * steps_per_period)
         return self._at(phase)
@@ -160,6 +172,7 @@ def itms_from_mesh_cycle(
     zeta: float,
     backlash_m: float,
     length_scale_m: float | None = None,
+    back_flank: BackFlank = "unmodified",
 ) -> ITMSModel:
     """The ITMS model of seed 003 Eq. 28 from a mesh cycle (per-pair compliance and gaps).
 
@@ -174,6 +187,8 @@ def itms_from_mesh_cycle(
         Half backlash ``b`` on the line of action (m).
     length_scale_m : float, optional
         ``L`` (m); default ``b``.
+    back_flank : {"unmodified", "mirror", "seed"}
+        Back-flank profile (module notes, :func:`~models.dynamics.sdof.back_flank_offset`).
     """
     L = backlash_m if length_scale_m is None else length_scale_m
     if not L > 0:
@@ -201,7 +216,7 @@ def itms_from_mesh_cycle(
         drive_stiffness=np.where(touch, k, 0.0),
         drive_gap=np.where(touch, gap, fill) / L,
         back_stiffness=np.where(on_path, k, 0.0),
-        back_error=err / L,
+        back_error=back_flank_offset(err, back_flank) / L,
         slot_offsets=offsets.astype(float),
         length_scale_m=float(L),
         mean_stiffness_N_m=float(k0),

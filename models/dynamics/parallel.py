@@ -123,6 +123,7 @@ def sweep_many(
     eb = np.full((n_jobs, n2, width), -np.inf)
     doff = np.empty((n_jobs, n2))
     boff = np.empty((n_jobs, n2))
+    npair = np.zeros((n_jobs, n2), dtype=np.int64)
     freqs = np.empty((n_jobs, f.shape[1]))
     x0, v0 = np.empty(n_jobs), np.zeros(n_jobs)
     zeta, force, b = np.empty(n_jobs), np.empty(n_jobs), np.empty(n_jobs)
@@ -130,7 +131,7 @@ def sweep_many(
         i, t, m = job.model_index, tables[job.model_index], models[job.model_index]
         p = t.kd.shape[1]
         kd[s, :, :p], ed[s, :, :p], kb[s, :, :p], eb[s, :, :p] = t.kd, t.ed, t.kb, t.eb
-        doff[s], boff[s] = t.drive_offset, t.back_offset
+        doff[s], boff[s], npair[s] = t.drive_offset, t.back_offset, t.static_pairs
         freqs[s] = f[i] if job.direction == "up" else f[i, ::-1]
         x0[s] = m.start_dte()
         zeta[s], force[s], b[s] = m.zeta, m.force, m.backlash
@@ -148,6 +149,7 @@ def sweep_many(
         eb,
         doff,
         boff,
+        npair,
         cs,
         sn,
         freqs,
@@ -159,6 +161,7 @@ def sweep_many(
         out["mean"],
         out["loss"],
         out["impact"],
+        out["partial"],
         out["periods_run"],
         out["period"],
         out["poinc"],

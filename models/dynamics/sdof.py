@@ -27,7 +27,8 @@ Equation (all three models of the seed, one form):
 The three models of the seed (:func:`sdof_from_mesh_cycle`):
 
 * ``"fvms"`` (Eq. 26): ``k = `` FVMS, ``e`` the gear error as a displacement excitation
-  (given as harmonics in metres; zero by default, i.e. perfect involutes);
+  (by default the cycle's own profile errors, tip relief included, weighted by the pair
+  stiffnesses, :func:`fvms_error_curve`; or given as harmonics in metres);
 * ``"vvms"`` (Eq. 30): ``k = `` VVMS (secant ``F / x_s``, errors and corner contact inside),
   no separate error;
 * ``"lste"`` (Eq. 31): constant stiffness ``k_0 = F / mean(x_s)`` and the alternating part of
@@ -36,6 +37,22 @@ The three models of the seed (:func:`sdof_from_mesh_cycle`):
   equilibrium);
 * ``"itms"`` (Eq. 28): one stiffness and one error per tooth pair
   (:mod:`models.dynamics.itms`), partial contact loss and corner contact included.
+
+Mean stiffness ``k_0`` (``reference_stiffness``): the seed scales each model by its own mean
+stiffness. For VVMS and LSTE that is ``mean(F / x_s)`` resp. ``F / mean(x_s)`` with ``x_s`` the
+loaded static transmission error, which *includes the profile errors* (seed Eq. 20b as
+written): a rigid 5 um error on every pair cuts the VVMS ``k_0`` of the Kahraman pair at 340 N m
+by 25 %, tip relief ``Delta = 1`` by 44 % (``omega_n`` by 25 %), though neither changes a tooth's
+compliance; FVMS and ITMS keep the error-free mean FVMS. ``Lambda``, ``zeta`` and the Hz/rpm of
+:mod:`models.dynamics.dimensional` inherit that choice; ``reference_stiffness="fvms"`` scales
+every model by the mean FVMS instead (one frequency axis for all models and reliefs).
+
+Back flanks (``back_flank``): the seed gives no back-side geometry. The cycle's profile errors
+(tip relief) are on the drive flanks; by default the back flanks are unmodified involutes
+(back contact at ``x < -b``); ``"mirror"`` relieves them alike, ``"seed"`` applies the drive-side
+error to the back side as a displacement (seed Eqs. 26, 28 literally), which narrows the back
+gap by the relief (:func:`back_flank_offset`). A user-given error series is a displacement
+excitation and shifts both flanks.
 
 Stiffness and error come either from their Fourier series (``source="fourier"``, seed
 Eq. 25, the cycle's ``*_harmonics``) or from the mesh-cycle curves themselves
@@ -62,10 +79,12 @@ from models.errors import ModelError
 from models.stiffness.mesh_cycle import Harmonics, MeshCycle
 
 __all__ = [
+    "BACK_FLANKS",
     "MODELS",
     "DynamicModel",
     "PeriodicCurve",
     "SDOFModel",
+    "back_flank_offset",
     "dead_zone",
     "dead_zone_potential",
     "fvms_error_curve",
@@ -210,9 +229,14 @@ class SDOFModel:
     backlash : float
         Half gap ``tilde b = b / L`` (-), >= 0; 0 gives a linear spring.
     stiffness : Harmonics or PeriodicCurve
-        ``tilde k`` over the mesh cycle phase (-), mean 1 by construction.
+        ``tilde k = k / k_0`` over the mesh cycle phase (-); mean 1 when ``k_0`` is the
+        model's own mean stiffness.
     error : Harmonics or PeriodicCurve
         ``tilde e`` over the mesh cycle phase (-).
+    back_error : Harmonics or PeriodicCurve, optional
+        Offset of the back-side contact (-): back contact where ``x - e_b < -b``. None (the
+        default): ``error`` itself, the Kahraman-Singh displacement excitation ``f(x - e)``
+        (a transmission error that shifts both flanks alike).
     length_scale_m : float
         ``L`` (m): dimensional DTE is ``L x``.
     mean_stiffness_N_m : float
@@ -229,6 +253,7 @@ class SDOFModel:
     length_scale_m: float = 1.0
     mean_stiffness_N_m: float = math.nan
     kind: str = "custom"
+    back_error: Series | None = None
 
     def __post_init__(self) -> None:
         if not (self.zeta >= 0 and self.backlash >= 0):
@@ -251,9 +276,17 @@ class SDOFModel:
     def pair_tables(
         self, steps_per_period: int
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The :class:`DynamicModel` tables: one column, ``kd = kb = k``, ``ed = eb = e``."""
+        """The :class:`DynamicModel` tables: one column, ``kd = kb = k``, ``ed = e``, ``eb = e_b``.
+
+        ``e_b`` is ``back_error``, or ``error`` when that is None.
+        """
         k, e = self.tables(1.0, steps_per_period)
-        return k[:, None], e[:, None], k[:, None], e[:, None]
+        if self.back_error is None:
+            eb = e
+        else:
+            phase = np.arange(2 * steps_per_period) / (2 * steps_per_period)
+            eb = np.ascontiguousarray(self.back_error(phase), dtype=float)
+        return k[:, None], e[:, None], k[:, None], eb[:, None]
 
     def start_dte(self) -> float:
         """Quasi-static DTE at phase 0 ignoring the stiffness variation: ``b + F + e_0``."""
@@ -264,9 +297,10 @@ class SDOFModel:
         phase = frequency * tau / (2 * math.pi)
         k = float(self.stiffness(phase))
         e = float(self.error(phase))
-        u = y[0] - e
+        eb = e if self.back_error is None else float(self.back_error(phase))
         b = self.backlash
-        f = u - b if u > b else (u + b if u < -b else 0.0)
+        u, w = y[0] - e, y[0] - eb
+        f = (u - b if u > b else 0.0) + (w + b if w < -b else 0.0)
         return np.array([y[1], self.force - 2 * self.zeta * y[1] - k * f])
 
     def static_dte(self) -> float:
@@ -329,16 +363,51 @@ def _error_series(cycle: MeshCycle, source: str, n: int | None) -> Series:
     return Harmonics(float(c[0].real), 2 * np.abs(c[k]), np.angle(c[k]))
 
 
+BackFlank = Literal["unmodified", "mirror", "seed"]
+BACK_FLANKS = ("unmodified", "mirror", "seed")
+
+
+def back_flank_offset(error: np.ndarray, back_flank: str) -> np.ndarray:
+    """Back-side offset ``e_b`` of a drive-flank profile error ``e`` (same unit).
+
+    The back-side contact is ``min(x - e_b + b, 0)``; ``back_flank`` says what the back flanks
+    carry (seed 003 gives no back-side geometry):
+
+    * ``"unmodified"``: perfect involutes, ``e_b = 0`` -- the drive-flank relief and errors of
+      the mesh cycle are not on the back flanks;
+    * ``"mirror"``: the same modification on the back flanks, ``e_b = -e``: material removed
+      widens the gap on both sides, so a relieved back flank touches at ``x < -b - e``;
+    * ``"seed"``: seed Eq. 28 literally (``h_i`` with ``x - e_i + b``), ``e_b = e``: a
+      displacement error that shifts both flanks alike -- for tip relief it *narrows* the back
+      gap, which no relieved flank does.
+    """
+    if back_flank not in BACK_FLANKS:
+        raise ModelError(f"`back_flank` must be one of {BACK_FLANKS}, was {back_flank!r}")
+    e = np.asarray(error, dtype=float)
+    if back_flank == "unmodified":
+        return np.zeros_like(e)
+    return -e if back_flank == "mirror" else e
+
+
+def _negated(h: Series) -> Series:
+    if isinstance(h, PeriodicCurve):
+        return PeriodicCurve(-np.asarray(h.values, dtype=float))
+    # -A cos(phi) = A cos(phi + pi)
+    return Harmonics(-h.mean, np.asarray(h.amplitude), np.asarray(h.phase_rad) + math.pi)
+
+
 def sdof_from_mesh_cycle(
     cycle: MeshCycle,
     kind: str,
     *,
     zeta: float,
     backlash_m: float,
-    error: Harmonics | PeriodicCurve | Literal["cycle"] | None = None,
+    error: Harmonics | PeriodicCurve | Literal["cycle"] | None = "cycle",
     length_scale_m: float | None = None,
     n_harmonics: int | None = None,
     source: Literal["fourier", "curve"] = "fourier",
+    back_flank: BackFlank = "unmodified",
+    reference_stiffness: Literal["model", "fvms"] | float = "model",
 ) -> SDOFModel:
     """The seed's FVMS, VVMS, LSTE or ITMS model from a mesh cycle.
 
@@ -350,30 +419,54 @@ def sdof_from_mesh_cycle(
         Mesh cycle at the operating torque (its ``load_N`` is ``f_0``).
     kind : {"fvms", "vvms", "lste", "itms"}
         ``"itms"`` returns an :class:`~models.dynamics.itms.ITMSModel` (per-pair curves;
-        ``error``, ``n_harmonics`` and ``source`` do not apply).
+        ``error``, ``n_harmonics``, ``source`` and ``reference_stiffness`` do not apply).
     zeta : float
-        Damping ratio.
+        Damping ratio (with respect to ``k_0``: ``c = 2 zeta sqrt(k_0 m)``).
     backlash_m : float
         Half backlash ``b`` on the line of action (m) (Table 3 gives ``2 b``).
-    error : Harmonics, PeriodicCurve or "cycle", optional
-        Gear error ``e(t)`` (m) for the FVMS model; ignored by the others. ``"cycle"``: the
-        cycle's own profile errors (tip relief) as :func:`fvms_error_curve`. None: no error.
+    error : Harmonics, PeriodicCurve, "cycle" or None
+        Gear error ``e(t)`` (m) of the FVMS model; ignored by the others. ``"cycle"`` (the
+        default): the cycle's own profile errors (tip relief) as :func:`fvms_error_curve`,
+        zero for an error-free cycle -- the FVMS model of seed Sec. 5.1 treats the relief as
+        this displacement excitation. A series: a displacement excitation on both flanks
+        (the back side follows it). None: no error, even when the cycle has relief.
     length_scale_m : float, optional
         ``L``; default ``b`` (then ``tilde b = 1``).
     n_harmonics : int, optional
         Truncate the Fourier series to this many harmonics (default: all of the cycle's).
     source : {"fourier", "curve"}
         Fourier series of the cycle (seed Eq. 25) or the sampled curves.
+    back_flank : {"unmodified", "mirror", "seed"}
+        What the back flanks carry of the cycle's drive-flank profile errors
+        (:func:`back_flank_offset`), for the FVMS model with ``error="cycle"`` and the ITMS
+        model. Default ``"unmodified"``: the relief is on the drive flanks only.
+    reference_stiffness : {"model", "fvms"} or float
+        ``k_0`` of the scaling (``omega_n = sqrt(k_0 / m)``, ``tilde F``, ``zeta``).
+        ``"model"`` (seed Eqs. 27, 30, 31): the model's own mean stiffness -- the mean FVMS,
+        the mean VVMS ``mean(F / x_s)``, or ``F / mean(x_s)`` for the LSTE model. The last two
+        are secant stiffnesses of the loaded static transmission error ``x_s``, which holds the
+        profile errors: a rigid 5 um error on every pair of the Kahraman pair at 340 N m cuts
+        the VVMS ``k_0`` by 25 %, tip relief ``Delta = 1`` by 44 % (``omega_n`` by 25 %), where
+        the FVMS stays put. ``"fvms"``: the cycle's mean FVMS (error-free compliance of the
+        pairs on the path, the same for every model, load and relief), so that ``Lambda`` is
+        one frequency axis for all models; ``tilde k`` then has mean ``k_mean / k_F0``. A
+        float: that ``k_0`` (N/m).
     """
     if kind not in MODELS:
         raise ModelError(f"unknown SDOF model {kind!r}; expected one of {MODELS}")
     if source not in ("fourier", "curve"):
         raise ModelError(f"`source` must be 'fourier' or 'curve', was {source!r}")
+    if back_flank not in BACK_FLANKS:
+        raise ModelError(f"`back_flank` must be one of {BACK_FLANKS}, was {back_flank!r}")
     if kind == "itms":
         from models.dynamics.itms import itms_from_mesh_cycle
 
         return itms_from_mesh_cycle(  # type: ignore[return-value]
-            cycle, zeta=zeta, backlash_m=backlash_m, length_scale_m=length_scale_m
+            cycle,
+            zeta=zeta,
+            backlash_m=backlash_m,
+            length_scale_m=length_scale_m,
+            back_flank=back_flank,
         )
     L = backlash_m if length_scale_m is None else length_scale_m
     if not L > 0:
@@ -387,27 +480,33 @@ def sdof_from_mesh_cycle(
         return Harmonics(h.mean, h.amplitude[:n], h.phase_rad[:n])
 
     err: Series = _zero_series()
+    back: Series | None = None
     if kind == "fvms":
         h = _series(cycle, "fvms", source, n)
-        k0 = h.mean
+        k_model = h.mean
         if isinstance(error, str):
             if error != "cycle":
                 raise ModelError(
                     f"`error` must be Harmonics, PeriodicCurve, 'cycle' or None, was {error!r}"
                 )
             err = _scaled(_error_series(cycle, source, n), L)
+            if back_flank == "unmodified":
+                back = _zero_series()
+            elif back_flank == "mirror":
+                back = _negated(err)
         elif error is not None:
             err = _scaled(cut(error), L)
     elif kind == "vvms":
         h = _series(cycle, "vvms", source, n)
-        k0 = h.mean
+        k_model = h.mean
     else:
         hx = _series(cycle, "lste", source, n)
         if not hx.mean > 0:
             raise ModelError("LSTE model needs a positive mean LSTE (torque > 0)")
-        k0 = F / hx.mean
-        h = Harmonics(k0, np.zeros(0), np.zeros(0))
+        k_model = F / hx.mean
+        h = Harmonics(k_model, np.zeros(0), np.zeros(0))
         err = _scaled(hx, L, drop_mean=True)
+    k0 = _reference_stiffness(cycle, reference_stiffness, k_model)
     stiffness = _scaled(h, k0)
     return SDOFModel(
         zeta=zeta,
@@ -418,4 +517,20 @@ def sdof_from_mesh_cycle(
         length_scale_m=L,
         mean_stiffness_N_m=k0,
         kind=kind,
+        back_error=back,
     )
+
+
+def _reference_stiffness(cycle: MeshCycle, reference: object, k_model: float) -> float:
+    if isinstance(reference, str):
+        if reference == "model":
+            return float(k_model)
+        if reference == "fvms":
+            return float(cycle.fvms_harmonics.mean)
+        raise ModelError(
+            f"`reference_stiffness` must be 'model', 'fvms' or a stiffness, was {reference!r}"
+        )
+    k0 = float(reference)  # type: ignore[arg-type]
+    if not (math.isfinite(k0) and k0 > 0):
+        raise ModelError(f"`reference_stiffness` must be finite and > 0, was {reference!r}")
+    return k0

@@ -9,7 +9,10 @@ each frequency (all in one compiled call, :func:`~models.dynamics.integrate.swee
    :func:`~models.dynamics.integrate.settle_periodic`: whole mesh periods until the Poincare
    point (state at phase 0) repeats with a period ``n`` in 1..8 to within ``tol`` for three
    periods running, at least ``min_periods``, at most ``max_periods``; ``period`` is ``n``,
-   or 0 ("aperiodic": quasi-periodic, chaotic, or not settled within ``max_periods``);
+   0 ("aperiodic": quasi-periodic, chaotic, or not settled within ``max_periods``), or
+   ``-n`` ("unresolved": repeats every ``n`` periods but a guard against slowly converging
+   transients and sub-tolerance splits still rejected it); the settled state is within about
+   ``tol / (1 - |mu|)`` of the orbit (``mu`` the slowest Floquet multiplier);
 2. ``record_periods`` whole periods are recorded (rounded up to a multiple of ``n``, so the
    record holds whole response periods), ``steps_per_period`` samples each, and the DTE
    amplitudes ``A_1..A_3`` of mesh harmonics 1-3 taken from their DFT (bin
@@ -18,16 +21,18 @@ each frequency (all in one compiled call, :func:`~models.dynamics.integrate.swee
    .. math:: A_{rms} = \sqrt{A_1^2 + A_2^2 + A_3^2}
 
    (SEED-NOTES 17: the seed prints sqrt(sum A_i));
-3. flags: **contact loss** if no pair touches on the drive side at a sample (``u = x - e < b``;
-   ITMS: ``e`` the smallest drive-side gap of the pairs), **back-side impact** if the back
-   flank is reached (``u < -b``);
+3. flags over the recorded periods: **contact loss** if no pair touches on the drive side
+   (``u = x - e < b``; ITMS: ``e`` the smallest drive-side gap of the pairs), **back-side
+   impact** if a back flank is reached (``x - e_b < -b``, ``e_b`` the largest back offset),
+   each RK4 step checked on the cubic Hermite interpolant of ``x`` (a loss shorter than a step
+   is not missed);
 4. the last :data:`~models.dynamics.integrate.POINCARE_POINTS` Poincare points are kept (for
    bifurcation diagrams).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -53,18 +58,29 @@ class SweepResult:
     mean_dte : numpy.ndarray
         Mean DTE (units of ``L``).
     contact_loss, backside_impact, converged : numpy.ndarray
-        Flags (bool); ``converged`` is ``period > 0``.
+        Flags (bool); ``converged`` is ``period > 0``. The contact flags cover the recorded
+        periods, each RK4 step checked on its cubic Hermite interpolant (not only the step
+        starts).
     periods : numpy.ndarray
         Periods run to settle (int).
     length_scale_m : float
         ``L`` (m).
     period : numpy.ndarray
-        Response period in mesh periods, 1..8, or 0 for aperiodic (int).
+        Response period in mesh periods, 1..8; 0 aperiodic (no repetition within ``tol`` at
+        ``max_periods``); ``-n`` unresolved (repeats every ``n`` periods within ``tol``, but
+        the period could not be confirmed: see :mod:`models.dynamics.integrate`) (int).
     poincare : numpy.ndarray
         ``(n, POINCARE_POINTS, 2)`` last Poincare points ``(x, x')``, oldest first (units of
         ``L``); NaN where fewer periods were run.
     entry_state : numpy.ndarray
         ``(n, 2)`` state each point started from (the previous point's end state).
+    partial_contact_loss : numpy.ndarray
+        Fraction (0..1) of the recorded step starts with *partial* contact loss: at least one
+        pair touches on the drive side, but fewer than carry load in the quasi-static solution
+        at that phase (:func:`~models.dynamics.integrate.static_pair_count`) -- what the ITMS
+        model adds (seed 003 Sec. 5.2); always 0 for the single-spring models. A fraction, not
+        a flag: any vibration shifts the entry of a pair a little, so small fractions occur
+        wherever a pair enters with little load.
     """
 
     frequency: np.ndarray
@@ -79,6 +95,18 @@ class SweepResult:
     period: np.ndarray
     poincare: np.ndarray
     entry_state: np.ndarray
+    partial_contact_loss: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    def __post_init__(self) -> None:
+        if np.size(self.partial_contact_loss) == 0 and np.size(self.frequency) > 0:
+            object.__setattr__(
+                self, "partial_contact_loss", np.zeros(np.shape(self.frequency), dtype=float)
+            )
+
+    @property
+    def unresolved(self) -> np.ndarray:
+        """``period < 0``: repetition within ``tol`` that the guards could not confirm."""
+        return np.asarray(self.period < 0)
 
     @property
     def arms_m(self) -> np.ndarray:
@@ -118,6 +146,7 @@ def empty_outputs(shape: tuple[int, ...]) -> dict[str, np.ndarray]:
         mean=np.zeros(shape),
         loss=np.zeros(shape, dtype=np.bool_),
         impact=np.zeros(shape, dtype=np.bool_),
+        partial=np.zeros(shape),
         periods_run=np.zeros(shape, dtype=np.int64),
         period=np.zeros(shape, dtype=np.int64),
         poinc=np.full((*shape, POINCARE_POINTS, 2), np.nan),
@@ -143,6 +172,7 @@ def result_from_outputs(
         period=out["period"],
         poincare=out["poinc"],
         entry_state=out["entry"],
+        partial_contact_loss=out["partial"],
     )
 
 
@@ -171,6 +201,7 @@ def _run(
         t.eb,
         t.drive_offset,
         t.back_offset,
+        t.static_pairs,
         t.cos,
         t.sin,
         freqs,
@@ -182,6 +213,7 @@ def _run(
         out["mean"],
         out["loss"],
         out["impact"],
+        out["partial"],
         out["periods_run"],
         out["period"],
         out["poinc"],
@@ -204,7 +236,8 @@ def steady_state(
     """Settle, record, and analyse one frequency; returns the end state and the figures.
 
     The figures: ``amplitudes`` (3,), ``arms``, ``mean_dte``, ``contact_loss``,
-    ``backside_impact``, ``converged``, ``periods`` (run to settle), ``period`` (0 aperiodic),
+    ``backside_impact``, ``partial_contact_loss`` (fraction), ``converged``, ``periods`` (run
+    to settle), ``period`` (0 aperiodic, ``-n`` unresolved),
     ``poincare`` (POINCARE_POINTS, 2).
     """
     _check(tol, min_periods, max_periods, record_periods)
@@ -218,6 +251,7 @@ def steady_state(
         mean_dte=float(r.mean_dte[0]),
         contact_loss=bool(r.contact_loss[0]),
         backside_impact=bool(r.backside_impact[0]),
+        partial_contact_loss=float(r.partial_contact_loss[0]),
         converged=bool(r.converged[0]),
         periods=int(r.periods[0]),
         period=int(r.period[0]),

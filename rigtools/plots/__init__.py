@@ -14,7 +14,12 @@ seed 001), ``tribo`` (film thickness, Lambda, friction and mesh force at the con
 tribo-dynamic state; seed 002).
 """
 
-from rigtools.plots.dynamics import hysteresis_band, plot_sweep, plot_sweep_bifurcation
+from rigtools.plots.dynamics import (
+    hysteresis_band,
+    hysteresis_bands,
+    plot_sweep,
+    plot_sweep_bifurcation,
+)
 from rigtools.plots.stiffness import (
     FIGURE_WIDTH_IN,
     mesh_cycle_figures,
@@ -37,6 +42,7 @@ __all__ = [
     "TABLE_6_TORQUES_NM",
     "ThermalClosure",
     "hysteresis_band",
+    "hysteresis_bands",
     "mesh_cycle_figures",
     "plot_mesh_cycle",
     "plot_natural_frequency_vs_load",

@@ -9,7 +9,7 @@ or ``rcParams``, so importing this module changes no global state.
 * :func:`plot_sweep`: Arms of the DTE (first three mesh harmonics) against ``Lambda`` -- or the
   mesh frequency (Hz) and DTE (um) with a scaling -- for an upward sweep (solid) and a downward
   sweep (dashed), with markers at the points with contact loss (open circles) and back-side
-  impact (crosses), and the hysteresis (jump) band shaded where the two branches differ.
+  impact (crosses), and each hysteresis (jump) band shaded where the two branches differ.
 * :func:`plot_sweep_bifurcation`: the Poincare points (DTE at mesh phase 0, after settling) against
   ``Lambda``: one dot per period of a period-1 response, ``n`` distinct dots for period ``n``,
   a cloud for aperiodic responses.
@@ -29,7 +29,7 @@ from matplotlib.figure import Figure
 from models.dynamics.dimensional import DimensionalScaling
 from models.dynamics.sweep import SweepResult
 
-__all__ = ["hysteresis_band", "plot_sweep", "plot_sweep_bifurcation"]
+__all__ = ["hysteresis_band", "hysteresis_bands", "plot_sweep", "plot_sweep_bifurcation"]
 
 _WIDTH_IN: Final = 7.0
 _HEIGHT_IN: Final = 4.2
@@ -48,22 +48,46 @@ def _check_result(result: object, name: str) -> SweepResult:
     return result
 
 
-def hysteresis_band(
-    up: SweepResult, down: SweepResult, rel_tol: float = 0.1
-) -> tuple[float, float] | None:
-    """``(Lambda_lo, Lambda_hi)`` spanning the points where the branches differ, or None.
-
-    The two sweeps are compared point by point in increasing ``Lambda`` (they must share the
-    grid); a point belongs to the band where ``|A_down - A_up| > rel_tol * max(A_down, A_up)``.
-    """
+def _differ(up: SweepResult, down: SweepResult, rel_tol: float) -> tuple[np.ndarray, np.ndarray]:
     u, d = up.sorted(), down.sorted()
     if not np.array_equal(u.frequency, d.frequency):
         raise ValueError("`up` and `down` must share their frequency grid")
     diff = np.abs(d.arms - u.arms) > rel_tol * np.maximum(d.arms, u.arms)
-    if not diff.any():
-        return None
+    return u.frequency, diff
+
+
+def hysteresis_bands(
+    up: SweepResult, down: SweepResult, rel_tol: float = 0.1
+) -> list[tuple[float, float]]:
+    """Every run of consecutive grid points where the branches differ, as ``(lo, hi)``.
+
+    The two sweeps are compared point by point in increasing ``Lambda`` (they must share the
+    grid); a point differs where ``|A_down - A_up| > rel_tol * max(A_down, A_up)``. Separate
+    regions (e.g. a super-harmonic near ``Lambda = 0.5`` and the primary resonance) give
+    separate bands, in increasing frequency; a single differing point gives ``(f, f)``.
+    """
+    f, diff = _differ(up, down, rel_tol)
     idx = np.flatnonzero(diff)
-    return float(u.frequency[idx[0]]), float(u.frequency[idx[-1]])
+    if idx.size == 0:
+        return []
+    breaks = np.flatnonzero(np.diff(idx) > 1)
+    starts = np.concatenate(([idx[0]], idx[breaks + 1]))
+    ends = np.concatenate((idx[breaks], [idx[-1]]))
+    return [(float(f[i]), float(f[j])) for i, j in zip(starts, ends, strict=True)]
+
+
+def hysteresis_band(
+    up: SweepResult, down: SweepResult, rel_tol: float = 0.1
+) -> tuple[float, float] | None:
+    """``(Lambda_lo, Lambda_hi)`` spanning *all* points where the branches differ, or None.
+
+    The envelope of :func:`hysteresis_bands` (which keeps separate regions apart; use it to
+    draw or report jump bands).
+    """
+    bands = hysteresis_bands(up, down, rel_tol)
+    if not bands:
+        return None
+    return bands[0][0], bands[-1][1]
 
 
 def _axes_units(
@@ -133,8 +157,8 @@ def plot_sweep(
     up : SweepResult
         Upward sweep (any order; drawn sorted).
     down : SweepResult, optional
-        Downward sweep on the same grid; then the hysteresis band (:func:`hysteresis_band`)
-        is shaded.
+        Downward sweep on the same grid; then every region where the branches differ
+        (:func:`hysteresis_bands`) is shaded separately.
     scaling : DimensionalScaling, optional
         Draw in mesh frequency (Hz) and um instead of ``Lambda`` and units of ``L``.
     title : str, optional
@@ -152,12 +176,16 @@ def plot_sweep(
     _, _, xl, yl = _axes_units(u, scaling)
     if down is not None:
         d = _check_result(down, "down").sorted()
-        band = hysteresis_band(u, d)
-        if band is not None:
-            lo, hi = band
+        for k, (lo, hi) in enumerate(hysteresis_bands(u, d)):
             if scaling is not None:
                 lo, hi = (float(v) for v in scaling.mesh_frequency_Hz([lo, hi]))
-            ax.axvspan(lo, hi, color=_BAND, zorder=0, label="up/down differ (jump band)")
+            ax.axvspan(
+                lo,
+                hi,
+                color=_BAND,
+                zorder=0,
+                label="up/down differ (jump band)" if k == 0 else "_nolegend_",
+            )
     _draw(ax, u, scaling, _UP, "-", "up")
     if down is not None:
         _draw(ax, d, scaling, _DOWN, "--", "down")

@@ -28,6 +28,7 @@ from models.dynamics import (
     printed_contact_force,
     sdof_from_mesh_cycle,
     settle,
+    settle_periodic,
     steady_state,
     sweep_up_down,
 )
@@ -136,6 +137,60 @@ def test_rk4_matches_solve_ivp(cycle, kind, lam, y_offset, atol):
     a, _, _ = periods(m, lam, y0, 4, steps_per_period=512)
     b = periods_solve_ivp(m, lam, y0, 4, rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(a, b, rtol=0, atol=atol)
+
+
+# --- contact flags ------------------------------------------------------------------------------
+def _min_offset_margin(model, lam, y, side, steps=4096):
+    """Smallest ``x - e`` (drive) or ``x - e_b`` (back) over one period, finely sampled."""
+    from models.dynamics.integrate import model_tables
+
+    _, xs, _ = periods(model, lam, y, 1, steps_per_period=steps, record=True)
+    t = model_tables(model, steps)
+    off = t.drive_offset if side == "drive" else t.back_offset
+    return float(np.min(xs - off[::2]))
+
+
+@pytest.mark.parametrize(("lam", "impact"), [(0.7, False), (0.9, True), (1.2, True), (1.5, False)])
+def test_backside_impact_flag_agrees_with_the_recorded_dte(lam, impact):
+    """Back-side impact flag, set and not set, against the recorded ``x - e``.
+
+    zeta = 0.05, F = 0.1, b = 1, e = 0.3 cos: the static state is b + F = 1.1 (so x - e must
+    swing by more than 2 b + F = 2.1 to reach the back flank), the linear response at
+    resonance is e / (2 zeta) = 3: near resonance (Lambda 0.9-1.2, double-sided impacts, mostly
+    aperiodic, so not in every period) the back flank is hit in the recorded periods at 0.9
+    and 1.2; at 0.7 (period 2) and 1.5 only the drive side separates. The flags of four
+    recorded periods must agree with ``x - e`` of the same four periods (same RK4 steps,
+    recorded at the step starts; margins > 1e-3 so the sub-step Hermite check cannot tip
+    them).
+    """
+    m = SDOFModel(zeta=0.05, force=0.1, backlash=1.0, error=sine_error(0.3))
+    s = settle_periodic(m, lam, (m.start_dte(), 0.0), tol=1e-8, max_periods=1500)
+    _, fig = steady_state(m, lam, s.state, min_periods=0, max_periods=0, record_periods=4)
+    _, _, u = periods(m, lam, s.state, 4, steps_per_period=128, record=True)
+    assert abs(u.min() + 1.0) > 1e-3 and abs(u.min() - 1.0) > 1e-3
+    assert fig["backside_impact"] == (u.min() < -1.0) == impact
+    assert fig["contact_loss"] and u.min() < 1.0  # every case loses drive-side contact
+
+
+@pytest.mark.parametrize(("depth", "lost"), [(3e-4, True), (-3e-4, False)])
+def test_brief_contact_loss_between_step_starts_is_flagged(depth, lost):
+    """A loss shorter than an RK4 step is caught by the Hermite check of the whole step.
+
+    Linear in contact: u = x - e = b + F + z, |z| = |X - eps| with X the FRF (hand-derived);
+    F = |z| (1 - depth) makes u dip below b by depth |z| for ~0.3 % of a period only
+    (depth > 0) or stay 5e-5 above (depth < 0). At 64 steps per period every step start stays
+    above b in both cases; the flag must match the orbit sampled 4096 times per period.
+    """
+    zeta, eps, lam = 0.05, 0.1, 0.8
+    X = eps / (1 - lam**2 + 2j * zeta * lam)
+    m = SDOFModel(zeta=zeta, force=abs(X - eps) * (1 - depth), backlash=1.0, error=sine_error(eps))
+    y0 = (1 + m.force + X.real, (1j * lam * X).real)  # on the linear orbit
+    y, fig = steady_state(m, lam, y0, tol=1e-11, max_periods=3000, steps_per_period=64)
+    _, _, u64 = periods(m, lam, y, 1, steps_per_period=64, record=True)
+    assert u64.min() > 1.0  # step starts alone would miss the loss
+    fine = _min_offset_margin(m, lam, y, "drive")
+    assert (fine < 1.0) == lost and abs(fine - 1.0) > 3e-5  # clear of the threshold
+    assert fig["contact_loss"] == lost
 
 
 # --- models from the mesh cycle ----------------------------------------------------------------
@@ -248,8 +303,9 @@ def test_seed003_softening_jump_and_superharmonic_pe_compliance(pe_compliance, k
     res, _ = sweep_many([m], LAM, **COARSE)
     up, down = res[0], res[1].sorted()
     iu, idn = jump_up(up), jump_down(down)
-    # ITMS is scaled with the mean FVMS, stiffer than what the loaded pairs see near the
-    # tips, so its resonance sits a little higher in its own Lambda
+    # ITMS is scaled with k_0 = the mean FVMS, which leaves out corner contact: the loaded
+    # pairs see more stiffness (corner-contact pairs join), so in its own Lambda the ITMS
+    # resonance sits a little above 1
     assert 0.88 < LAM[iu] < 1.1
     assert LAM[idn] < LAM[iu] - 0.06  # a hysteresis band of several grid steps
     band = slice(idn, iu)

@@ -77,8 +77,15 @@ def test_partial_contact_loss_is_per_pair(cycle):
     assert m.contact_force(cycle.phase[i], lo) == pytest.approx(0.0, abs=1e-15)
 
 
-def test_itms_equals_fvms_for_a_common_error_and_no_separation(compliance):
-    """No corner contact, one constant error for every pair: ITMS == FVMS (Eq. 26 = Eq. 28)."""
+@pytest.mark.parametrize(
+    ("back_flank", "sign"), [("seed", 1.0), ("unmodified", 0.0), ("mirror", -1.0)]
+)
+def test_itms_equals_fvms_for_a_common_error_and_no_separation(compliance, back_flank, sign):
+    """No corner contact, one constant error for every pair: ITMS == FVMS (Eq. 26 = Eq. 28).
+
+    Drive side: ``k_F max(x - e - b, 0)``; back side ``k_F min(x - e_b + b, 0)`` with the
+    back-flank offset ``e_b = sign * e`` of the chosen back flank, in both models.
+    """
     e0 = 5e-6
     cyc = mesh_cycle(
         PAIR,
@@ -88,9 +95,15 @@ def test_itms_equals_fvms_for_a_common_error_and_no_separation(compliance):
         corner_contact=False,
         error=lambda s: np.full(np.shape(s), e0),
     )
-    itms = itms_from_mesh_cycle(cyc, zeta=ZETA, backlash_m=HALF_BACKLASH_M)
+    itms = itms_from_mesh_cycle(cyc, zeta=ZETA, backlash_m=HALF_BACKLASH_M, back_flank=back_flank)
     fvms = sdof_from_mesh_cycle(
-        cyc, "fvms", zeta=ZETA, backlash_m=HALF_BACKLASH_M, error="cycle", source="curve"
+        cyc,
+        "fvms",
+        zeta=ZETA,
+        backlash_m=HALF_BACKLASH_M,
+        error="cycle",
+        source="curve",
+        back_flank=back_flank,
     )
     assert fvms.mean_stiffness_N_m == pytest.approx(itms.mean_stiffness_N_m, rel=1e-12)
     assert fvms.force == pytest.approx(itms.force, rel=1e-12)
@@ -99,12 +112,173 @@ def test_itms_equals_fvms_for_a_common_error_and_no_separation(compliance):
         for x in (-2.0, -0.5, 0.9, 1.3, 2.5):  # back side, gap, drive side
             kf = float(fvms.stiffness(phase))
             u = x - float(fvms.error(phase))
-            f = kf * (u - 1 if u > 1 else (u + 1 if u < -1 else 0.0))
+            w = x - sign * float(fvms.error(phase))
+            f = kf * (max(u - 1, 0.0) + min(w + 1, 0.0))
             assert itms.contact_force(phase, x) == pytest.approx(f, rel=1e-12, abs=1e-14)
+            assert fvms.rhs(phase * 2 * np.pi, np.array([x, 0.0]), 1.0)[1] == pytest.approx(
+                fvms.force - f, rel=1e-12, abs=1e-14
+            )
     y0 = (fvms.start_dte() + 0.8, 0.0)  # with contact loss and a back-side excursion
     a, _, _ = periods(itms, 0.9, y0, 10, steps_per_period=100)
     b, _, _ = periods(fvms, 0.9, y0, 10, steps_per_period=100)
     np.testing.assert_allclose(a, b, rtol=0, atol=1e-11)
+
+
+BACK_SIGN = {"unmodified": 0.0, "mirror": -1.0, "seed": 1.0}
+
+
+@pytest.mark.parametrize("back_flank", list(BACK_SIGN))
+def test_back_side_contact_of_each_back_flank(cycle, back_flank):
+    """Back-side force from the cycle's arrays, pair by pair (independent of the passage tables).
+
+    Only pairs on the theoretical path AE (zero separation) touch on the back side, with their
+    compliance and the back offset e_b = sign * e_j (0 unmodified, -e mirror, +e seed Eq. 28).
+    Deep in back contact with unmodified flanks that is the FVMS: -k_F (|x| - b).
+    """
+    m = itms_from_mesh_cycle(cycle, zeta=ZETA, backlash_m=HALF_BACKLASH_M, back_flank=back_flank)
+    k0, L = m.mean_stiffness_N_m, HALF_BACKLASH_M
+    on = cycle.separation_m == 0.0
+    for i in range(0, cycle.phase.size, 7):
+        k = np.where(on[i], 1.0 / cycle.compliance_m_N[i], 0.0) / k0
+        eb = BACK_SIGN[back_flank] * cycle.error_m[i] / L
+        for x in (-3.0, -1.3, -1.1, -1.0 + 1e-9, -0.8):
+            expected = float(np.sum(k * np.minimum(x + 1.0 - eb, 0.0)))
+            got = m.contact_force(cycle.phase[i], x)
+            assert got == pytest.approx(expected, rel=1e-9, abs=1e-12), (i, x)
+        if back_flank == "unmodified":  # corner-contact pairs never touch the back flank
+            deep = m.contact_force(cycle.phase[i], -3.0)
+            assert deep == pytest.approx(-2.0 * cycle.fvms_N_m[i] / k0, rel=1e-9)
+
+
+def test_relieved_drive_flanks_do_not_narrow_the_back_gap(compliance):
+    """Delta = 1: back contact starts at x = -b unless the back flank is modelled otherwise.
+
+    The relief reaches 25.7 um = 0.378 b at the tips; seed Eq. 28 taken literally (``"seed"``)
+    lets the back flank touch from x = -0.62 b there, the unmodified back flank only at -b,
+    and a mirrored relief only below -b - 0.378 b.
+    """
+    relief = normalised_tip_relief(PAIR, compliance, TORQUE_NM, amount=1.0)
+    cyc = mesh_cycle(PAIR, compliance, TORQUE_NM, error=relief, n_phases=200)
+    e_max = float(np.max(np.where(cyc.separation_m == 0.0, cyc.error_m, 0.0))) / HALF_BACKLASH_M
+    assert 0.3 < e_max < 0.45
+    i = int(np.argmax(np.max(np.where(cyc.separation_m == 0.0, cyc.error_m, 0.0), axis=1)))
+    x_inside = -1.0 + 0.9 * e_max  # inside the true gap of unmodified back flanks
+    force = {
+        bf: itms_from_mesh_cycle(
+            cyc, zeta=ZETA, backlash_m=HALF_BACKLASH_M, back_flank=bf
+        ).contact_force(cyc.phase[i], x_inside)
+        for bf in BACK_SIGN
+    }
+    assert force["unmodified"] == 0.0 and force["mirror"] == 0.0
+    assert force["seed"] < -1e-3  # the seed convention already pushes back here
+    x_deep = -1.0 - 0.5 * e_max  # past -b: unmodified touches, the mirrored relief not yet
+    m = itms_from_mesh_cycle(cyc, zeta=ZETA, backlash_m=HALF_BACKLASH_M, back_flank="mirror")
+    u = itms_from_mesh_cycle(cyc, zeta=ZETA, backlash_m=HALF_BACKLASH_M)
+    assert u.contact_force(cyc.phase[i], x_deep) < m.contact_force(cyc.phase[i], x_deep) <= 0.0
+    # the default is the unmodified back flank, also through sdof_from_mesh_cycle
+    assert u.contact_force(cyc.phase[i], x_inside) == 0.0
+    via = sdof_from_mesh_cycle(cyc, "itms", zeta=ZETA, backlash_m=HALF_BACKLASH_M)
+    assert via.contact_force(cyc.phase[i], x_inside) == 0.0
+    with pytest.raises(ModelError, match="back_flank"):
+        itms_from_mesh_cycle(cyc, zeta=ZETA, backlash_m=HALF_BACKLASH_M, back_flank="inverse")  # type: ignore[arg-type]
+
+
+def test_backside_impact_flag_of_the_itms_model(compliance):
+    """ITMS back-side impacts: the flag agrees with the recorded ``x - e_b`` (seed 003 Sec. 3.1).
+
+    Delta = 1 relief, 340 N m, zeta = 0.02, a small half backlash of 10 um (tilde F = 1.6):
+    down the resonance the seed's back-flank convention (relief narrowing the back gap) hits
+    the back flank, unmodified back flanks do not. The flags of four recorded periods are
+    checked against x - e_b at the same RK4 step starts.
+    """
+    from models.dynamics.integrate import model_tables, settle_periodic
+
+    relief = normalised_tip_relief(PAIR, compliance, TORQUE_NM, amount=1.0)
+    cyc = mesh_cycle(PAIR, compliance, TORQUE_NM, error=relief, n_phases=200)
+    lam = np.array([1.0, 0.96, 0.92, 0.9])
+    seen = {}
+    for bf in ("seed", "unmodified"):
+        m = itms_from_mesh_cycle(cyc, zeta=ZETA, backlash_m=10e-6, back_flank=bf)
+        r = sweep(m, lam, steps_per_period=128, tol=1e-6, max_periods=600)
+        s = settle_periodic(m, 0.9, tuple(r.entry_state[-1]), tol=1e-6, max_periods=600)
+        _, fig = steady_state(m, 0.9, s.state, min_periods=0, max_periods=0, record_periods=4)
+        _, xs, _ = periods(m, 0.9, s.state, 4, steps_per_period=128, record=True)
+        boff = np.tile(model_tables(m, 128).back_offset[::2], 4)
+        margin = float(np.min(xs - boff)) + m.backlash
+        assert abs(margin) > 1e-2
+        assert fig["backside_impact"] == (margin < 0.0) == bool(r.backside_impact[-1])
+        seen[bf] = fig["backside_impact"]
+    assert seen == {"seed": True, "unmodified": False}
+
+
+def test_fvms_takes_the_tip_relief_of_the_cycle_by_default(cycle):
+    """The FVMS model's error defaults to the cycle's profile errors (seed Sec. 5.1)."""
+    m = sdof_from_mesh_cycle(cycle, "fvms", zeta=ZETA, backlash_m=HALF_BACKLASH_M)
+    explicit = sdof_from_mesh_cycle(
+        cycle, "fvms", zeta=ZETA, backlash_m=HALF_BACKLASH_M, error="cycle"
+    )
+    np.testing.assert_array_equal(m.error(cycle.phase), explicit.error(cycle.phase))
+    none = sdof_from_mesh_cycle(cycle, "fvms", zeta=ZETA, backlash_m=HALF_BACKLASH_M, error=None)
+    assert np.all(none.error(cycle.phase) == 0.0)
+    relieved = np.any(cycle.error_m != 0.0)
+    assert (np.ptp(m.error(cycle.phase)) > 0.1) == relieved  # relief: e_F spans > 0.1 b
+    # unmodified back flanks: the back side sees no error; mirrored: the negated one
+    assert np.all(m.pair_tables(100)[3] == 0.0)
+    mir = sdof_from_mesh_cycle(
+        cycle, "fvms", zeta=ZETA, backlash_m=HALF_BACKLASH_M, back_flank="mirror"
+    )
+    np.testing.assert_allclose(mir.pair_tables(100)[3], -m.pair_tables(100)[1], atol=1e-15)
+
+
+def test_static_pair_count_is_the_contact_of_the_static_analysis(cycle):
+    """Pairs carrying load in the quasi-static ITMS solution = the static analysis' contacts."""
+    from models.dynamics.integrate import static_pair_count
+
+    m = itms_from_mesh_cycle(cycle, zeta=ZETA, backlash_m=HALF_BACKLASH_M)
+    kd, ed, _, _ = m.pair_tables(100)  # 2 N = 200: the cycle's phases
+    np.testing.assert_array_equal(
+        static_pair_count(kd, ed, m.force), np.sum(cycle.in_contact, axis=1)
+    )
+
+
+def test_partial_contact_loss_fraction(compliance):
+    """Partial contact loss of the ITMS model, recounted from the recorded DTE (seed Sec. 5.2).
+
+    Delta = 1, 340 N m, zeta = 0.02, coarse steps (64): at resonance (Lambda = 1) pairs that
+    carry load statically separate while another still touches for a large part of the
+    period; well above resonance (1.3) never. The kernel's fraction must equal the count from
+    x at the same RK4 step starts, the pair tables and the quasi-static DTE of the model
+    (ITMSModel.quasi_static_dte). A single-spring model never has partial loss.
+    """
+    from models.dynamics.integrate import settle_periodic
+
+    relief = normalised_tip_relief(PAIR, compliance, TORQUE_NM, amount=1.0)
+    cyc = mesh_cycle(PAIR, compliance, TORQUE_NM, error=relief, n_phases=200)
+    m = itms_from_mesh_cycle(cyc, zeta=ZETA, backlash_m=HALF_BACKLASH_M)
+    n = 64
+    kd, ed, _, _ = m.pair_tables(n)
+    kd, ed = kd[::2], ed[::2]  # step starts
+    xqs = m.quasi_static_dte(np.arange(n) / n)
+    static = np.sum((kd > 0) & (xqs[:, None] - m.backlash - ed > 1e-9), axis=1)
+    frac = {}
+    for lam in (1.0, 1.3):
+        s = settle_periodic(
+            m, lam, (m.start_dte(), 0.0), steps_per_period=n, tol=1e-6, max_periods=600
+        )
+        _, fig = steady_state(
+            m, lam, s.state, steps_per_period=n, min_periods=0, max_periods=0, record_periods=4
+        )
+        _, xs, _ = periods(m, lam, s.state, 4, steps_per_period=n, record=True)
+        touching = np.sum(
+            (np.tile(kd, (4, 1)) > 0) & (xs[:, None] - np.tile(ed, (4, 1)) > m.backlash), axis=1
+        )
+        expected = np.mean((touching > 0) & (touching < np.tile(static, 4)))
+        assert fig["partial_contact_loss"] == pytest.approx(expected, abs=1e-12)
+        frac[lam] = fig["partial_contact_loss"]
+    assert frac[1.0] > 0.1 and frac[1.3] == 0.0
+    v = sdof_from_mesh_cycle(cyc, "vvms", zeta=ZETA, backlash_m=HALF_BACKLASH_M)
+    r = sweep(v, [1.1, 1.05, 1.0, 0.95], steps_per_period=n, tol=1e-5, max_periods=300)
+    assert np.all(r.partial_contact_loss == 0.0) and r.arms.max() > 0.2  # through resonance
 
 
 def test_compiled_reference_and_solve_ivp_agree(cycle):

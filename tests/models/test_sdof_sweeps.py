@@ -117,6 +117,54 @@ def test_a_slowly_converging_period_one_is_not_taken_for_period_two():
     assert s.period == 1
 
 
+def test_extrapolation_guard_rejects_a_slow_flip_transient():
+    """Only the extrapolation guard can reject this false period 2 (zeta = 1e-4).
+
+    Linear oscillator at Lambda = 2: the free transient turns by half a turn per mesh period
+    and decays by exp(-pi zeta) = 0.99969 (hand-derived), so points two periods apart differ by
+    6.3e-4 of it: with a transient of 1e-3 they repeat within tol = 1e-6 while the split
+    (2e-3) is far above 100 tol and shrinks by only 0.06 % per two periods. The true response
+    is period 1 (the forced one); at the cap the run is reported unresolved, -2, not period 2.
+    """
+    m = SDOFModel(
+        zeta=1e-4, force=0.0, backlash=0.0, error=Harmonics(0.0, np.array([0.1]), np.array([0.0]))
+    )
+    X = 0.1 / (1 - 4 + 2j * 1e-4 * 2)
+    s = settle_periodic(m, 2.0, (X.real + 1e-3, (2j * X).real), tol=1e-6, max_periods=300)
+    assert s.period == -2 and s.unresolved and not s.converged and s.periods_run == 300
+    pts = s.poincare[-3:]
+    assert np.max(np.abs(pts[2] - pts[0])) < 1e-6 < 100e-6 < np.max(np.abs(pts[2] - pts[1]))
+
+
+def test_resolution_guard_needs_the_split_above_100_tol():
+    """Only the resolution guard rejects a settled period-2 orbit split by less than 100 tol.
+
+    The Mathieu subharmonic at Lambda = 2 (split ~0.5, settled to round-off, so the
+    extrapolation bound is nil): with tol = 1e-2 (100 tol = 1 > split) it is unresolved (-2),
+    with tol = 1e-4 it is period 2.
+    """
+    m = mathieu()
+    s = settle_periodic(m, 2.0, (m.start_dte() + 0.01, 0.0), tol=1e-10, max_periods=4000)
+    assert s.period == 2
+    split = float(np.max(np.abs(s.poincare[-1] - s.poincare[-2])))
+    assert 0.1 < split < 1.0
+    coarse = settle_periodic(m, 2.0, s.state, tol=1e-2, max_periods=60)
+    assert coarse.period == -2 and coarse.periods_run == 60
+    assert settle_periodic(m, 2.0, s.state, tol=1e-4, max_periods=60).period == 2
+
+
+def test_sweep_reports_unresolved_and_aperiodic_points():
+    """The sweep carries the codes: -n unresolved, 0 aperiodic, and converged only for n > 0."""
+    lam = 2 / (1 + math.sqrt(5))
+    free = SDOFModel(zeta=0.0, force=0.0, backlash=0.0)
+    r = sweep(free, [lam], y0=(1.0, 0.0), tol=1e-6, max_periods=100)
+    assert r.period[0] == 0 and not r.converged[0] and not r.unresolved[0]
+    m = mathieu()
+    s = settle_periodic(m, 2.0, (m.start_dte() + 0.01, 0.0), tol=1e-10, max_periods=4000)
+    r = sweep(m, [2.0], y0=s.state, tol=1e-2, max_periods=60)
+    assert r.period[0] == -2 and r.unresolved[0] and not r.converged[0]
+
+
 # --- parallel sweeps ---------------------------------------------------------------------------
 def test_sweep_many_is_identical_to_the_serial_sweeps(compliance):
     lam = np.linspace(0.45, 1.3, 18)
@@ -141,6 +189,7 @@ def test_sweep_many_is_identical_to_the_serial_sweeps(compliance):
             "mean_dte",
             "contact_loss",
             "backside_impact",
+            "partial_contact_loss",
             "periods",
             "period",
             "poincare",
@@ -197,6 +246,66 @@ def test_dimensional_scaling_by_hand(compliance):
         equivalent_mass(0.0, 1.0, 0.1, 0.1)
     with pytest.raises(ModelError, match="gear"):
         disc_inertia(PAIR, 3)
+
+
+def test_secant_mean_stiffness_holds_the_profile_errors(compliance):
+    """VVMS / LSTE k_0 (seed Eqs. 20b, 30, 31) include the profile errors; "fvms" does not.
+
+    A rigid error e0 on every pair shifts every gap alike, so the loaded LSTE is the error-free
+    one plus e0 (hand-derived from the compatibility conditions): k_0(VVMS) = mean(F / (x_s0 +
+    e0)), k_0(LSTE) = F / (mean(x_s0) + e0). For 5 um at 340 N m that is 25 % softer; the FVMS
+    and the "fvms" reference stiffness do not move.
+    """
+    e0 = 5e-6
+    c0 = mesh_cycle(PAIR, compliance, 340.0, n_phases=200)
+    c5 = mesh_cycle(PAIR, compliance, 340.0, n_phases=200, error=lambda s: np.full(np.shape(s), e0))
+    np.testing.assert_allclose(c5.lste_m, c0.lste_m + e0, rtol=1e-9)
+    F = c0.load_N
+    kw = dict(zeta=0.02, backlash_m=HALF_BACKLASH_M)
+    v0, v5 = (sdof_from_mesh_cycle(c, "vvms", **kw) for c in (c0, c5))
+    assert v5.mean_stiffness_N_m == pytest.approx(np.mean(F / (c0.lste_m + e0)), rel=1e-9)
+    assert 0.2 < 1 - v5.mean_stiffness_N_m / v0.mean_stiffness_N_m < 0.3
+    l5 = sdof_from_mesh_cycle(c5, "lste", **kw)
+    assert l5.mean_stiffness_N_m == pytest.approx(F / (np.mean(c0.lste_m) + e0), rel=1e-9)
+    kf0 = c0.fvms_harmonics.mean
+    for c in (c0, c5):
+        for kind in ("fvms", "vvms", "lste"):
+            m = sdof_from_mesh_cycle(c, kind, reference_stiffness="fvms", **kw)
+            assert m.mean_stiffness_N_m == pytest.approx(kf0, rel=1e-12)
+            assert m.force == pytest.approx(F / (kf0 * HALF_BACKLASH_M), rel=1e-12)
+    m = sdof_from_mesh_cycle(c5, "vvms", reference_stiffness="fvms", **kw)
+    assert m.stiffness.mean == pytest.approx(v5.mean_stiffness_N_m / kf0, rel=1e-12)
+    # one frequency axis for every model with the common reference
+    hz = {
+        kind: dimensional_scaling(
+            sdof_from_mesh_cycle(c5, kind, reference_stiffness="fvms", **kw), PAIR
+        ).natural_frequency_Hz
+        for kind in ("fvms", "vvms", "lste")
+    }
+    assert max(hz.values()) == pytest.approx(min(hz.values()), rel=1e-12)
+    with pytest.raises(ModelError, match="reference_stiffness"):
+        sdof_from_mesh_cycle(c5, "vvms", reference_stiffness="tangent", **kw)  # type: ignore[arg-type]
+    with pytest.raises(ModelError, match="reference_stiffness"):
+        sdof_from_mesh_cycle(c5, "vvms", reference_stiffness=-1.0, **kw)
+
+
+def test_reference_stiffness_is_only_a_change_of_scale(compliance):
+    """The same rig (same k(t), m, c) in two scalings gives the same response in metres.
+
+    Scaling by k_a or k_b: Lambda_b = Lambda_a sqrt(k_a / k_b), zeta_b = zeta_a sqrt(k_a / k_b)
+    (c = 2 zeta sqrt(k_0 m) fixed), same length scale; the Arms in metres must agree to the
+    integration error.
+    """
+    cyc = mesh_cycle(PAIR, compliance, 340.0, n_phases=200, n_harmonics=10)
+    kw = dict(backlash_m=HALF_BACKLASH_M)
+    a = sdof_from_mesh_cycle(cyc, "vvms", zeta=0.03, **kw)
+    r = math.sqrt(a.mean_stiffness_N_m / cyc.fvms_harmonics.mean)
+    b = sdof_from_mesh_cycle(cyc, "vvms", zeta=0.03 * r, reference_stiffness="fvms", **kw)
+    for lam in (0.7, 1.2):
+        _, fa = steady_state(a, lam, (a.start_dte(), 0.0), tol=1e-10, max_periods=3000)
+        _, fb = steady_state(b, lam * r, (b.start_dte(), 0.0), tol=1e-10, max_periods=3000)
+        assert fa["arms"] * HALF_BACKLASH_M == pytest.approx(fb["arms"] * HALF_BACKLASH_M, rel=1e-6)
+        assert fa["mean_dte"] == pytest.approx(fb["mean_dte"], rel=1e-8)
 
 
 # --- curve tables ------------------------------------------------------------------------------

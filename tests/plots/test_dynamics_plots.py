@@ -13,9 +13,15 @@ from matplotlib.figure import Figure
 
 from models.dynamics import SDOFModel, sweep_up_down
 from models.dynamics.dimensional import dimensional_scaling
+from models.dynamics.sweep import SweepResult
 from models.geometry import load_gear_set
 from models.stiffness.mesh_cycle import Harmonics
-from rigtools.plots.dynamics import hysteresis_band, plot_sweep, plot_sweep_bifurcation
+from rigtools.plots.dynamics import (
+    hysteresis_band,
+    hysteresis_bands,
+    plot_sweep,
+    plot_sweep_bifurcation,
+)
 from rigtools.plots.stiffness import save_png
 
 LAM = np.linspace(0.6, 2.2, 33)
@@ -53,12 +59,17 @@ def test_sweep_figure_lines_markers_and_band(sweeps):
     np.testing.assert_allclose(ln["down"].get_ydata(), down.arms)
     loss = down.contact_loss & ~down.backside_impact
     np.testing.assert_allclose(ln["down: contact loss"].get_xdata(), LAM[loss])
+    bands = hysteresis_bands(up, down)
+    assert bands and all(lo <= hi for lo, hi in bands)
     band = hysteresis_band(up, down)
-    assert band is not None and band[0] < band[1]
-    spans = [p for p in ax.patches if p.get_label() == "up/down differ (jump band)"]
-    assert len(spans) == 1
-    x0, x1 = spans[0].get_bbox().x0, spans[0].get_bbox().x1  # data x of an axvspan
-    assert x0 == pytest.approx(band[0]) and x1 == pytest.approx(band[1])
+    assert band == (bands[0][0], bands[-1][1])
+    spans = [p for p in ax.patches if p.get_facecolor()[:3] == (232 / 255,) * 3]
+    assert len(spans) == len(bands)
+    for sp, (lo, hi) in zip(spans, bands, strict=True):
+        x0, x1 = sp.get_bbox().x0, sp.get_bbox().x1  # data x of an axvspan
+        assert x0 == pytest.approx(lo) and x1 == pytest.approx(hi)
+    labels = [p.get_label() for p in spans]
+    assert labels.count("up/down differ (jump band)") == 1  # one legend entry
 
 
 def test_sweep_figure_in_rig_units(sweeps, tmp_path):
@@ -100,3 +111,44 @@ def test_marker_series_only_where_flagged(sweeps):
     assert ("up: contact loss" in ln) == bool((up.contact_loss & ~up.backside_impact).any())
     assert ("up: back-side impact" in ln) == bool(up.backside_impact.any())
     assert "down" not in ln
+
+
+def _result(freq, arms):
+    """A SweepResult with the given Arms (first harmonic only), all else neutral."""
+    n = len(freq)
+    a = np.zeros((n, 3))
+    a[:, 0] = arms
+    return SweepResult(
+        frequency=np.asarray(freq, dtype=float),
+        amplitudes=a,
+        arms=np.asarray(arms, dtype=float),
+        mean_dte=np.zeros(n),
+        contact_loss=np.zeros(n, dtype=bool),
+        backside_impact=np.zeros(n, dtype=bool),
+        converged=np.ones(n, dtype=bool),
+        periods=np.zeros(n, dtype=int),
+        length_scale_m=1.0,
+        period=np.ones(n, dtype=int),
+        poincare=np.zeros((n, 1, 2)),
+        entry_state=np.zeros((n, 2)),
+    )
+
+
+def test_separate_regions_give_separate_bands():
+    """Super-harmonic and primary jump regions apart: two bands, two shaded spans, not one."""
+    f = np.round(np.arange(0.4, 1.41, 0.1), 2)  # 0.4 .. 1.4
+    up = np.ones(f.size)
+    down = up.copy()
+    down[[1, 2]] = 2.0  # 0.5, 0.6
+    down[[5, 6, 7]] = 3.0  # 0.9, 1.0, 1.1
+    down[10] = 1.05  # within rel_tol: not a band
+    bands = hysteresis_bands(_result(f, up), _result(f[::-1], down[::-1]))
+    assert bands == [(0.5, 0.6), (0.9, 1.1)]
+    assert hysteresis_band(_result(f, up), _result(f, down)) == (0.5, 1.1)
+    ax = plot_sweep(_result(f, up), _result(f, down)).axes[0]
+    spans = sorted((p.get_bbox().x0, p.get_bbox().x1) for p in ax.patches)
+    np.testing.assert_allclose(spans, bands)
+    assert hysteresis_bands(_result(f, up), _result(f, up)) == []
+    assert hysteresis_band(_result(f, up), _result(f, up)) is None
+    with pytest.raises(ValueError, match="grid"):
+        hysteresis_bands(_result(f, up), _result(f + 0.01, up))
