@@ -20,7 +20,9 @@
   one file, so numba's disk cache cannot go stale across modules;
 * :mod:`models.dynamics.tribo`, :mod:`~models.dynamics.tribo_ehl_coupling`,
   :mod:`~models.dynamics.tribo_case`: the six-DOF tribo-dynamic model of seed 002 with mixed
-  EHL, its iterative decoupling loop, and the shipped case ``seed-002-tribo``.
+  EHL, its iterative decoupling loop, and the shipped cases ``seed-002-tribo`` (the seed's
+  tables, suspect mu_r) and ``seed-002-tribo-mixed`` (mu_r = 0.142 Pa s, reproduces the seed's
+  statements).
 """
 
 from models.dynamics.dimensional import (

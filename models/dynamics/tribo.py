@@ -10,7 +10,7 @@ transmission error (DTE) is the seed's
 Tooth pair ``i`` (one per *slot* of :func:`~models.stiffness.mesh_cycle.prepare_mesh_cycle`,
 theoretical path only) carries
 
-.. math:: N_i = k_i(t)\, D(\delta - e(t); b) + c_i(t)\,\dot\delta, \qquad
+.. math:: N_i = k_i(t)\, D(s; b) + c_i(t)\,\dot s, \qquad s = \delta - e(t), \qquad
           k_i = \frac{k_{mi} k_{hi}}{k_{mi} + k_{hi}}, \qquad
           c_i = c_m \frac{k_i}{\sum_j k_j},
 
@@ -18,8 +18,12 @@ with ``k_mi`` the tooth-pair mesh stiffness at the pair's position, ``k_hi`` the
 stiffness in series (seed 002), ``D`` the continuous dead zone of
 :func:`models.dynamics.sdof.dead_zone` (half gap ``b``; the seed's "displacement function
 considering backlash"), ``e`` the static transmission error, and the mesh damping ``c_m``
-shared in proportion to stiffness so that the total viscous damping on the DTE is ``c_m`` at
-all times, as in the Kahraman-Singh SDOF model of :mod:`models.dynamics.sdof`. The sliding
+shared in proportion to stiffness so that the total viscous damping is ``c_m`` at all times.
+The damping acts on ``s' = delta' - e'`` as seed 002 writes it (``c_i s'``, with ``s`` the
+difference between dynamic and static transmission error); the option
+``TriboDynamics.damp_relative_rate = False`` puts it on ``delta'`` instead, the form of the
+Kahraman-Singh SDOF model of :mod:`models.dynamics.sdof` (the two coincide for a constant
+``e``, e.g. the shipped cases, which have no error). The sliding
 friction force of pair ``i`` acts along ``y`` (seed 002's ``F_f = lambda f F_d``):
 
 .. math:: F_{fi} = \mu_i \max(N_i, 0), \qquad \mu_i = \lambda_i f_i,
@@ -54,7 +58,9 @@ as the seed does with its DTE equation and equivalent mass ``m_e``); with
 State ``(q, x_p, x_g, y_p, y_g)`` and velocities: ten first-order equations. With rigid
 bearings the translations are held at zero, and with ``mu = 0`` and ``k_h = inf`` the model
 is exactly the SDOF model ``m_e q'' + c_m q' + k(t) D(q - e) = W_0`` of
-:mod:`models.dynamics.sdof` (tested numerically).
+:mod:`models.dynamics.sdof` when the damping is on the DTE rate (``damp_relative_rate =
+False``; tested numerically), and ``m_e s'' + c_m s' + k(t) D(s) = W_0 - m_e e''`` (seed 002's
+DTE equation) with the default.
 
 Choices where the seed is silent or garbled:
 
@@ -62,7 +68,7 @@ Choices where the seed is silent or garbled:
   stiffness, arms, film stiffness and friction are periodic tables over one mesh period, not
   functions of the vibration (the vibration velocities are mm/s against m/s of rolling);
 * the friction normal force is the compressive part ``max(N_i, 0)`` of the pair load (a pair
-  that separates carries no friction); the viscous mesh damping acts on the DTE at all times
+  that separates carries no friction); the viscous mesh damping acts at all times
   (Kahraman-Singh), so the mesh force may be slightly tensile just after separation;
 * the mean friction torque is not balanced by the output torque (the drive holds the speed);
   only its fluctuation about the rigid-body motion is modelled, through ``q``.
@@ -166,6 +172,11 @@ class TriboDynamics:
         hand-made model without geometry.
     rigid_bearings : bool
         Hold the translations at zero (infinitely stiff bearings).
+    damp_relative_rate : bool
+        True (default, seed 002): the mesh damping acts on ``s' = delta' - e'``, the rate of
+        the seed's ``s = delta - e``; False: on the DTE rate ``delta'`` (the Kahraman-Singh
+        form of :mod:`models.dynamics.sdof`). The two coincide when ``e`` is constant, as in
+        the shipped cases (seed 002 gives no error amplitudes).
     """
 
     mesh_period_s: float
@@ -190,6 +201,7 @@ class TriboDynamics:
     error_m: np.ndarray
     positions_m: np.ndarray
     rigid_bearings: bool = False
+    damp_relative_rate: bool = True
 
     def __post_init__(self) -> None:
         km = np.asarray(self.mesh_stiffness_N_m)
@@ -277,15 +289,36 @@ class TriboDynamics:
             float,
         )
 
+    @property
+    def error_rate_m_s(self) -> np.ndarray:
+        """``de/dt`` at the half steps (m/s): spectral derivative of the periodic ``error_m``.
+
+        Exact for an error given as a Fourier series below the table's Nyquist harmonic (seed
+        002 models ``e(t)`` as a Fourier series); the Nyquist harmonic is dropped.
+        """
+        e = np.asarray(self.error_m, float)
+        n2 = e.size
+        spec = np.fft.rfft(e)
+        harm = np.arange(spec.size)
+        if n2 % 2 == 0:
+            harm[-1] = 0
+        return np.fft.irfft(spec * (2j * math.pi * harm / self.mesh_period_s), n2)
+
     def tables(self) -> tuple[np.ndarray, ...]:
-        """``(k, mu, rho_p, rho_g, e)`` as contiguous float arrays for the kernels."""
+        """``(k, mu, rho_p, rho_g, e, e_damped)`` as contiguous float arrays for the kernels.
+
+        ``e_damped`` is the error rate the mesh damping subtracts from the DTE rate:
+        :attr:`error_rate_m_s` when :attr:`damp_relative_rate`, else zeros.
+        """
         c = np.ascontiguousarray
+        ed = self.error_rate_m_s if self.damp_relative_rate else np.zeros(np.shape(self.error_m))
         return (
             c(self.combined_stiffness_N_m, float),
             c(self.friction, float),
             c(self.arm_p_m, float),
             c(self.arm_g_m, float),
             c(self.error_m, float),
+            c(ed, float),
         )
 
     def with_lubrication(
@@ -306,7 +339,7 @@ class TriboDynamics:
         """
         n2 = np.shape(self.error_m)[0]
         T = self.mesh_period_s
-        k, mu, a1, a2, e = self.tables()
+        k, mu, a1, a2, e, ed = self.tables()
         p = self.params().tolist()
 
         def f(t: float, y: np.ndarray) -> np.ndarray:
@@ -316,8 +349,9 @@ class TriboDynamics:
             w = pos - math.floor(pos)
             kk, mm, aa1, aa2 = (((1 - w) * a[j0] + w * a[j1])[None, :] for a in (k, mu, a1, a2))
             ee = [(1 - w) * e[j0] + w * e[j1]]
+            eed = [(1 - w) * ed[j0] + w * ed[j1]]
             dy = np.empty(N_STATE)
-            _rhs_py(np.asarray(y, float), 0, kk, mm, aa1, aa2, ee, p, dy)
+            _rhs_py(np.asarray(y, float), 0, kk, mm, aa1, aa2, ee, eed, p, dy)
             return dy
 
         return f
@@ -353,11 +387,11 @@ class TriboRecord:
 
 # ----------------------------------------------------------------------------- kernels
 @njit(cache=True)
-def _rhs(y, j, K, MU, A1, A2, E, p, dy):  # pragma: no cover - compiled
+def _rhs(y, j, K, MU, A1, A2, E, ED, p, dy):  # pragma: no cover - compiled
     W0, me, r1, r2, I1, I2 = p[0], p[1], p[2], p[3], p[4], p[5]
     mp, mg, kbx, kby, cbx, cby, cm, b = p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13]
     d = y[0] + y[1] - y[2]
-    dd = y[5] + y[6] - y[7]
+    dd = y[5] + y[6] - y[7] - ED[j]
     u = d - E[j]
     if u > b:
         f = u - b
@@ -397,12 +431,12 @@ def _rhs(y, j, K, MU, A1, A2, E, p, dy):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _loads(y, j, K, MU, E, p, out):  # pragma: no cover - compiled
+def _loads(y, j, K, MU, E, ED, p, out):  # pragma: no cover - compiled
     """Per-slot loads into ``out``; returns (total, friction force)."""
     b = p[13]
     cm = p[12]
     u = y[0] + y[1] - y[2] - E[j]
-    dd = y[5] + y[6] - y[7]
+    dd = y[5] + y[6] - y[7] - ED[j]
     if u > b:
         f = u - b
     elif u < -b:
@@ -427,27 +461,27 @@ def _loads(y, j, K, MU, E, p, out):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _step(y, j, K, MU, A1, A2, E, p, h, k1, k2, k3, k4, tmp):  # pragma: no cover - compiled
+def _step(y, j, K, MU, A1, A2, E, ED, p, h, k1, k2, k3, k4, tmp):  # pragma: no cover - compiled
     n2 = E.shape[0]
     j0 = 2 * j
     j1 = j0 + 1
     j2 = (j0 + 2) % n2
-    _rhs(y, j0, K, MU, A1, A2, E, p, k1)
+    _rhs(y, j0, K, MU, A1, A2, E, ED, p, k1)
     for i in range(10):
         tmp[i] = y[i] + 0.5 * h * k1[i]
-    _rhs(tmp, j1, K, MU, A1, A2, E, p, k2)
+    _rhs(tmp, j1, K, MU, A1, A2, E, ED, p, k2)
     for i in range(10):
         tmp[i] = y[i] + 0.5 * h * k2[i]
-    _rhs(tmp, j1, K, MU, A1, A2, E, p, k3)
+    _rhs(tmp, j1, K, MU, A1, A2, E, ED, p, k3)
     for i in range(10):
         tmp[i] = y[i] + h * k3[i]
-    _rhs(tmp, j2, K, MU, A1, A2, E, p, k4)
+    _rhs(tmp, j2, K, MU, A1, A2, E, ED, p, k4)
     for i in range(10):
         y[i] = y[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
 
 
 @njit(cache=True)
-def _periods(y, n_periods, K, MU, A1, A2, E, p, h, rec, loads, fric):  # pragma: no cover
+def _periods(y, n_periods, K, MU, A1, A2, E, ED, p, h, rec, loads, fric):  # pragma: no cover
     """Run ``n_periods``; Poincare points; record the last period if ``rec.shape[0] > 0``."""
     n = E.shape[0] // 2
     k1 = np.empty(10)
@@ -463,19 +497,21 @@ def _periods(y, n_periods, K, MU, A1, A2, E, p, h, rec, loads, fric):  # pragma:
             if last and rec.shape[0] > 0:
                 for i in range(10):
                     rec[j, i] = y[i]
-                ftot, ffr = _loads(y, 2 * j, K, MU, E, p, out)
+                ftot, ffr = _loads(y, 2 * j, K, MU, E, ED, p, out)
                 for i in range(K.shape[1]):
                     loads[j, i] = out[i]
                 fric[j, 0] = ftot
                 fric[j, 1] = ffr
-            _step(y, j, K, MU, A1, A2, E, p, h, k1, k2, k3, k4, tmp)
+            _step(y, j, K, MU, A1, A2, E, ED, p, h, k1, k2, k3, k4, tmp)
         for i in range(10):
             pts[per, i] = y[i]
     return pts
 
 
 @njit(cache=True)
-def _settle(y, K, MU, A1, A2, E, p, h, scale, tol, min_periods, max_periods):  # pragma: no cover
+def _settle(
+    y, K, MU, A1, A2, E, ED, p, h, scale, tol, min_periods, max_periods
+):  # pragma: no cover
     n = E.shape[0] // 2
     k1 = np.empty(10)
     k2 = np.empty(10)
@@ -490,7 +526,7 @@ def _settle(y, K, MU, A1, A2, E, p, h, scale, tol, min_periods, max_periods):  #
         for i in range(10):
             prev[i] = y[i]
         for j in range(n):
-            _step(y, j, K, MU, A1, A2, E, p, h, k1, k2, k3, k4, tmp)
+            _step(y, j, K, MU, A1, A2, E, ED, p, h, k1, k2, k3, k4, tmp)
         count += 1
         d = 0.0
         for i in range(10):
@@ -580,9 +616,9 @@ def tribo_periods(
     rec = np.empty((n if record else 0, N_STATE))
     loads = np.empty((n if record else 0, ns))
     fric = np.empty((n if record else 0, 2))
-    K, MU, A1, A2, E = model.tables()
+    K, MU, A1, A2, E, ED = model.tables()
     pts = _periods(
-        y, int(n_periods), K, MU, A1, A2, E, model.params(), model.step_s, rec, loads, fric
+        y, int(n_periods), K, MU, A1, A2, E, ED, model.params(), model.step_s, rec, loads, fric
     )
     return pts, (_record(model, rec, loads, fric) if record else None)
 
@@ -616,7 +652,7 @@ def tribo_settle(
     k_mean = float(np.mean(model.combined_stiffness_N_m.sum(axis=1)))
     xs = model.load_N / k_mean
     scale = np.concatenate([np.full(5, xs), np.full(5, xs * 2 * math.pi / model.mesh_period_s)])
-    K, MU, A1, A2, E = model.tables()
+    K, MU, A1, A2, E, ED = model.tables()
     count, ok = _settle(
         y,
         K,
@@ -624,6 +660,7 @@ def tribo_settle(
         A1,
         A2,
         E,
+        ED,
         model.params(),
         model.step_s,
         scale,
@@ -642,12 +679,12 @@ def tribo_settle(
     return start, int(count), rec
 
 
-def _rhs_py(y, j, K, MU, A1, A2, E, p, dy) -> None:
+def _rhs_py(y, j, K, MU, A1, A2, E, ED, p, dy) -> None:
     """Plain-Python twin of the compiled right-hand side (same operations, same order)."""
     W0, me, r1, r2, I1, I2 = p[0], p[1], p[2], p[3], p[4], p[5]
     mp, mg, kbx, kby, cbx, cby, cm, b = p[6], p[7], p[8], p[9], p[10], p[11], p[12], p[13]
     d = y[0] + y[1] - y[2]
-    dd = y[5] + y[6] - y[7]
+    dd = y[5] + y[6] - y[7] - ED[j]
     u = d - E[j]
     f = u - b if u > b else (u + b if u < -b else 0.0)
     Kj, MUj, A1j, A2j = K[j], MU[j], A1[j], A2[j]
@@ -682,7 +719,7 @@ def tribo_periods_reference(
 ) -> np.ndarray:
     """Same RK4, same operation order, plain Python: Poincare points ``(n_periods, 10)``."""
     y = _check_state(y0, model).tolist()
-    K, MU, A1, A2, E = (a.tolist() for a in model.tables())
+    K, MU, A1, A2, E, ED = (a.tolist() for a in model.tables())
     p = model.params().tolist()
     h = model.step_s
     n2 = len(E)
@@ -692,13 +729,13 @@ def tribo_periods_reference(
     for per in range(int(n_periods)):
         for j in range(n):
             j0, j1, j2 = 2 * j, 2 * j + 1, (2 * j + 2) % n2
-            _rhs_py(y, j0, K, MU, A1, A2, E, p, k1)
+            _rhs_py(y, j0, K, MU, A1, A2, E, ED, p, k1)
             tmp = [y[i] + 0.5 * h * k1[i] for i in range(10)]
-            _rhs_py(tmp, j1, K, MU, A1, A2, E, p, k2)
+            _rhs_py(tmp, j1, K, MU, A1, A2, E, ED, p, k2)
             tmp = [y[i] + 0.5 * h * k2[i] for i in range(10)]
-            _rhs_py(tmp, j1, K, MU, A1, A2, E, p, k3)
+            _rhs_py(tmp, j1, K, MU, A1, A2, E, ED, p, k3)
             tmp = [y[i] + h * k3[i] for i in range(10)]
-            _rhs_py(tmp, j2, K, MU, A1, A2, E, p, k4)
+            _rhs_py(tmp, j2, K, MU, A1, A2, E, ED, p, k4)
             y = [y[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]) for i in range(10)]
         pts[per] = y
     return pts
@@ -742,7 +779,7 @@ def build_tribo_dynamics(
     ----------
     pair : GearPair
     torque_Nm : float
-        Pinion torque ``T_p`` (N m); ``W_0 = T_p / r_bp``.
+        Pinion torque ``T_p`` (N m), > 0 (drive-side contact); ``W_0 = T_p / r_bp``.
     pinion_speed_rpm : float
         Pinion speed (rpm); mesh period ``60 / (z_p n)``.
     mass_p_kg, mass_g_kg, inertia_p_kgm2, inertia_g_kgm2 : float
@@ -765,7 +802,27 @@ def build_tribo_dynamics(
         mesh modes.
     rigid_bearings : bool
         Infinitely stiff bearings (translations held at zero).
+
+    Raises
+    ------
+    ModelError
+        A non-positive torque, mass or inertia, or a negative stiffness, damping ratio or
+        backlash.
     """
+    for name, v, strict in (
+        ("torque_Nm", torque_Nm, True),
+        ("mass_p_kg", mass_p_kg, True),
+        ("mass_g_kg", mass_g_kg, True),
+        ("inertia_p_kgm2", inertia_p_kgm2, True),
+        ("inertia_g_kgm2", inertia_g_kgm2, True),
+        ("bearing_stiffness_x_N_m", bearing_stiffness_x_N_m, False),
+        ("bearing_stiffness_y_N_m", bearing_stiffness_y_N_m, False),
+        ("bearing_damping_ratio", bearing_damping_ratio, False),
+        ("mesh_damping_ratio", mesh_damping_ratio, False),
+        ("half_backlash_m", half_backlash_m, False),
+    ):
+        if not (math.isfinite(v) and (v > 0 if strict else v >= 0)):
+            raise ModelError(f"`{name}` must be finite and {'>' if strict else '>='} 0, was {v!r}")
     if compliance is None:
         from models.stiffness.potential_energy import pair_compliance
 

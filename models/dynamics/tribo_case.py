@@ -9,8 +9,21 @@ whose :meth:`TriboCase.dynamics` builds the six-DOF model
 (:func:`~models.dynamics.tribo.build_tribo_dynamics`) and :func:`solve_tribo_case` runs the
 decoupling loop (:func:`~models.dynamics.tribo_ehl_coupling.solve_tribo_dynamics`).
 
-The shipped case ``seed-002-tribo`` carries seed 002's tables; its comments say which table
-each number comes from and what was assumed where the seed is silent.
+Shipped cases (their comments say which table each number comes from and what was assumed
+where the seed is silent):
+
+* ``seed-002-tribo``: seed 002's tables, with ``beta_K = 6.0e-3 /K`` (printed 6.0e-4, an
+  extraction error: see :mod:`models.ehl.lubricant`) and the printed reference viscosity
+  ``mu_R = 1.42 Pa s``, marked SUSPECT in the file: at it the pair runs in full film and the
+  seed's qualitative statements do not hold;
+* ``seed-002-tribo-mixed``: the same with ``mu_R = 0.142 Pa s``, whose converged state
+  reproduces seed 002's statements (mixed regime ``1 < Lambda < 3``, film stiffness about two
+  orders of magnitude above the mesh stiffness, minimal change of the comprehensive
+  stiffness). Use this one to reproduce the seed's behaviour.
+
+Values are range-checked on loading (positive masses, inertias, viscosity, roughness, ...;
+``0 < R0 < 1``, ``0 < n <= 1``, ``relaxation`` in (0, 1]): a value outside raises
+:class:`~models.errors.ModelError` naming ``section.key``.
 """
 
 from __future__ import annotations
@@ -100,6 +113,61 @@ _SCHEMA: dict[str, dict[str, tuple[str, float, bool]]] = {
     },
 }
 _CASE = {"name", "source", "gear_set"}
+
+# (section, key) -> (lower, upper, lower included, upper included), in the file's units;
+# None: unbounded. Keys not listed (epsilon_per_K, beta_K_per_K, a_V_per_K, d_d_um) take any
+# finite value. A value outside raises ModelError naming section.key.
+_RANGES: dict[tuple[str, str], tuple[float | None, float | None, bool, bool]] = {
+    ("operating", "pinion_speed_rpm"): (0.0, None, False, False),
+    ("operating", "torque_Nm"): (0.0, None, False, False),
+    ("operating", "inlet_temperature_K"): (0.0, None, False, False),
+    ("inertia", "pinion_mass_kg"): (0.0, None, False, False),
+    ("inertia", "wheel_mass_kg"): (0.0, None, False, False),
+    ("inertia", "pinion_inertia_kgm2"): (0.0, None, False, False),
+    ("inertia", "wheel_inertia_kgm2"): (0.0, None, False, False),
+    ("mesh", "damping_ratio"): (0.0, None, True, False),
+    ("mesh", "backlash_um"): (0.0, None, True, False),
+    ("bearings", "stiffness_x_N_m"): (0.0, None, False, False),
+    ("bearings", "stiffness_y_N_m"): (0.0, None, False, False),
+    ("bearings", "damping_ratio"): (0.0, None, True, False),
+    ("lubricant", "mu_ref_Pas"): (0.0, None, False, False),
+    ("lubricant", "T_ref_K"): (0.0, None, False, False),
+    ("lubricant", "B0"): (0.0, None, False, False),
+    ("lubricant", "R0"): (0.0, 1.0, False, False),
+    ("lubricant", "K0_prime"): (0.0, None, False, False),
+    ("lubricant", "K00_GPa"): (0.0, None, False, False),
+    ("lubricant", "n_power"): (0.0, 1.0, False, True),
+    ("lubricant", "G_cr_kPa"): (0.0, None, False, False),
+    ("lubricant", "alpha_per_GPa"): (0.0, None, False, False),
+    ("lubricant", "conductivity_W_mK"): (0.0, None, False, False),
+    ("lubricant", "density_kg_m3"): (0.0, None, False, False),
+    ("lubricant", "specific_heat_J_kgK"): (0.0, None, False, False),
+    ("roughness", "sigma_pinion_um"): (0.0, None, False, False),
+    ("roughness", "sigma_wheel_um"): (0.0, None, False, False),
+    ("roughness", "asperity_radius_um"): (0.0, None, False, False),
+    ("roughness", "eta_beta_sigma"): (0.0, None, True, False),
+    ("friction", "asperity_friction"): (0.0, None, True, False),
+    ("friction", "limiting_shear_coeff"): (0.0, None, False, False),
+    ("solver", "tolerance"): (0.0, 1.0, False, False),
+    ("solver", "load_floor"): (0.0, 1.0, True, False),
+    ("solver", "relaxation"): (0.0, 1.0, False, True),
+}
+
+
+def _check_range(where: str, key: str, v: float) -> None:
+    bounds = _RANGES.get((where, key))
+    if bounds is None:
+        return
+    lo, hi, lo_in, hi_in = bounds
+    ok = (lo is None or v > lo or (lo_in and v == lo)) and (
+        hi is None or v < hi or (hi_in and v == hi)
+    )
+    if not ok:
+        left = "(-inf" if lo is None else ("[" if lo_in else "(") + f"{lo:g}"
+        right = "inf)" if hi is None else f"{hi:g}" + ("]" if hi_in else ")")
+        raise ModelError(f"{where}.{key} = {v!r}: must be in {left}, {right}")
+
+
 _INTEGERS = {"max_iterations", "ehl_samples", "steps_per_period"}
 
 
@@ -212,6 +280,8 @@ def _section(doc: dict[str, Any], name: str) -> dict[str, Any]:
                 raise ModelError(f"{name}.{key}: required key missing")
             continue
         v = _value(name, key, d[key])
+        if isinstance(v, float):
+            _check_range(name, key, v)
         out[attr] = v * factor if isinstance(v, float) else v
     return out
 
@@ -222,8 +292,11 @@ def load_tribo_case(name_or_path: str | Path) -> TriboCase:
     Raises
     ------
     ModelError
-        Unknown, missing or ill-typed keys (the message names ``section.key`` and the file),
-        an unknown gear set, or a file that is not TOML.
+        Unknown, missing or ill-typed keys, or values out of their physical range (positive
+        masses, inertias, speed, torque, inlet temperature, viscosity, bulk modulus, roughness
+        and asperity radius; ``0 < R0 < 1``; ``0 < n <= 1``; ``relaxation`` in (0, 1]; ...;
+        the message names ``section.key`` and the file), an unknown gear set, or a file that is
+        not TOML.
     """
     p = Path(name_or_path)
     if not p.suffix and not p.exists():

@@ -12,7 +12,8 @@ The loop (seed 002, "iterative decoupling method" and its flowchart):
    thermal factor ``C_t`` and the Greenwood-Tripp load split (:func:`models.ehl.mixed_contact`,
    Doolittle-Tait / Carreau lubricant), film parameter ``Lambda``, signed mixed friction
    coefficient, and the film stiffness ``k_h = -dF/dh_c`` of the *mixed* contact by a central
-   difference of the load (``F (1 +- epsilon)``, ``epsilon = 1e-2``);
+   difference in ``ln F`` (``F (1 +- epsilon)``, ``epsilon = 1e-2``;
+   :func:`models.ehl.asperity.mixed_film_stiffness`);
 3. convergence: the largest relative change of ``k_h`` over the loaded points (seed 002's
    criterion ``|k_h^new - k_h^old| / k_h^old < 1e-3``) and of the friction coefficient
    (``max |f^new - f^old| / max |f^old|``, the other quantity the seed initialises and feeds
@@ -25,7 +26,10 @@ vibration velocities are neglected against them. The EHL is evaluated at ``ehl_s
 interpolated linearly in time between them (film *compliance* ``1/k_h`` and friction), and
 next to a sample where the pair is unloaded the loaded neighbour's value is held.
 The flash-temperature energy equation of seed 002 is not solved: the film is evaluated at the
-inlet temperature with Moes' isothermal film times ``C_t``.
+inlet temperature with Moes' isothermal film times ``C_t``, and the shear stress at the inlet
+temperature. With seed 002's lubricant the film friction then sits at the assumed limiting
+shear stress ``Lambda_L p`` over most of the path (:mod:`models.ehl.asperity`): its level is
+that of the assumption ``limiting_shear_coeff = 0.07``.
 """
 
 from __future__ import annotations
@@ -36,7 +40,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from models.dynamics.tribo import TriboDynamics, TriboRecord, tribo_settle
-from models.ehl.asperity import SEED_002_ROUGHNESS, Roughness, mixed_contact
+from models.ehl.asperity import SEED_002_ROUGHNESS, Roughness, mixed_film_stiffness
 from models.ehl.lubricant import SEED_002_LUBRICANT, Lubricant
 from models.errors import ModelError
 from models.geometry.gear_pair import GearPair
@@ -206,16 +210,14 @@ def contact_cycle(
         u1, u2 = pair.surface_velocities(sl, pinion_speed_rpm)
         mat = pair.pinion.material
         E = mat.youngs_modulus_Pa / (1 - mat.poisson_ratio**2)
-        eps = lubrication.film_load_step
-        scale = np.concatenate(
-            [np.ones_like(F), np.full_like(F, 1 + eps), np.full_like(F, 1 - eps)]
-        )
-        mc = mixed_contact(
-            np.tile(F, 3) * scale / pair.face_width_m,
-            np.tile(R, 3),
-            np.tile(u1, 3),
-            np.tile(u2, 3),
+        mc, kh = mixed_film_stiffness(
+            F,
+            pair.face_width_m,
+            R,
+            u1,
+            u2,
             E,
+            rel_step=lubrication.film_load_step,
             lubricant=lubrication.lubricant,
             roughness=lubrication.roughness,
             inlet_temperature_K=lubrication.inlet_temperature_K,
@@ -223,15 +225,13 @@ def contact_cycle(
             limiting_shear_coeff=lubrication.limiting_shear_coeff,
             thermal=lubrication.thermal,
         )
-        n = F.size
-        h0, hp, hm = mc.h_c_m[:n], mc.h_c_m[n : 2 * n], mc.h_c_m[2 * n :]
-        out["h"][loaded] = h0
-        out["lam"][loaded] = mc.film_parameter[:n]
-        out["f"][loaded] = mc.friction[:n]
+        out["h"][loaded] = mc.h_c_m
+        out["lam"][loaded] = mc.film_parameter
+        out["f"][loaded] = mc.friction
         # k_h ~ F^2 underflows to 0 at vanishing loads without a floor: keep it > 0
-        out["kh"][loaded] = np.maximum(2 * eps * F / (hm - hp), np.finfo(float).tiny)
-        out["share"][loaded] = 1.0 / mc.gamma_2[:n]
-        out["ct"][loaded] = mc.C_t[:n]
+        out["kh"][loaded] = np.maximum(kh, np.finfo(float).tiny)
+        out["share"][loaded] = 1.0 / mc.gamma_2
+        out["ct"][loaded] = mc.C_t
     return ContactCycle(
         s,
         np.where(loaded, loads, np.nan),

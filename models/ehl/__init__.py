@@ -17,6 +17,7 @@ from models.ehl.asperity import (
     greenwood_tripp_integral,
     mixed_contact,
     mixed_contact_along_path,
+    mixed_film_stiffness,
 )
 from models.ehl.film import (
     FilmState,
@@ -24,6 +25,7 @@ from models.ehl.film import (
     composite_roughness,
     film_parameter,
     film_stiffness,
+    film_stiffness_from_steps,
     moes_central_film,
     moes_groups,
     thermal_reduction_factor,
@@ -43,9 +45,11 @@ __all__ = [
     "composite_roughness",
     "film_parameter",
     "film_stiffness",
+    "film_stiffness_from_steps",
     "greenwood_tripp_integral",
     "mixed_contact",
     "mixed_contact_along_path",
+    "mixed_film_stiffness",
     "moes_central_film",
     "moes_groups",
     "thermal_reduction_factor",

@@ -44,19 +44,38 @@ a uniform Carreau shear stress over the Hertz band at the film's mean pressure, 
 limiting shear stress ``Lambda_L p`` (Bair & Winer 1979), plus the boundary friction of the
 asperity share. ``lambda = sign(u_1 - u_2)`` is the direction factor: negative in approach,
 zero at the pitch point, positive in recess (``u_1`` the pinion flank's velocity).
+
+Where the friction level comes from: with seed 002's lubricant (``G_cr = 31 kPa``, Doolittle-
+Tait ``alpha_0 = 19 /GPa``) the Carreau stress at the film's mean pressure exceeds
+``Lambda_L p`` over most of seed 002's path of contact (2000 rpm, single-pair load, 9 equally
+spaced points: 8 capped with ``mu_R = 1.42 Pa s``, 6 with 0.142 Pa s), so the film friction
+there is ``Lambda_L / gamma_1`` and its level is that of the *assumed* ``Lambda_L = 0.07``,
+not of the rheology; only near the pitch point, where the sliding vanishes, is it viscous.
+The model has **no flash temperature**: seed 002's film energy equation and Jaeger's
+moving-source surface temperatures are not solved; the shear is evaluated at the inlet
+temperature (the thermal factor ``C_t`` acts on the film thickness only). A thermal model
+would lower the viscous stress where the sliding is high.
+
+The film stiffness of the mixed contact, ``k_h = -dF/dh_c`` with the load split re-solved at
+``F (1 +- e)``, is :func:`mixed_film_stiffness`.
+
+Roughness: seed 002's "surface roughness RMS 0.4 um" is read as each flank's RMS (composite
+``sigma_s = 0.57 um``); if it is the composite value, ``Lambda`` is ``sqrt(2)`` higher and the
+asperity share much lower everywhere.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from models.ehl.film import central_film_thickness, composite_roughness
+from models.ehl.film import central_film_thickness, composite_roughness, film_stiffness_from_steps
 from models.ehl.lubricant import SEED_002_LUBRICANT, Lubricant
+from models.errors import ModelError
 
 if TYPE_CHECKING:
     from models.geometry.gear_pair import GearPair
@@ -70,6 +89,7 @@ __all__ = [
     "greenwood_tripp_integral",
     "mixed_contact",
     "mixed_contact_along_path",
+    "mixed_film_stiffness",
 ]
 
 #: Assumed ``n_s beta_s sigma_s`` (-): seed 002 gives no asperity density.
@@ -121,6 +141,13 @@ class Roughness:
     asperity_radius_m: float = 6e-6
     eta_beta_sigma: float = ETA_BETA_SIGMA_DEFAULT
     d_d_m: float = 0.0
+
+    def __post_init__(self) -> None:
+        vals = (self.sigma_1_m, self.sigma_2_m, self.asperity_radius_m, self.eta_beta_sigma)
+        if not all(math.isfinite(v) and v >= 0 for v in vals) or not math.isfinite(self.d_d_m):
+            raise ModelError(f"Roughness values must be finite and >= 0, got {self!r}")
+        if not (self.sigma_m > 0 and self.asperity_radius_m > 0):
+            raise ModelError("Roughness needs a composite sigma > 0 and an asperity radius > 0")
 
     @property
     def sigma_m(self) -> float:
@@ -300,3 +327,66 @@ def mixed_contact_along_path(
     E = mat.youngs_modulus_Pa / (1 - mat.poisson_ratio**2)
     w = np.asarray(load_N, float) / pair.face_width_m
     return mixed_contact(w, R, u1, u2, E, **kwargs)
+
+
+def mixed_film_stiffness(
+    load_N: ArrayLike,
+    face_width_m: float,
+    reduced_radius_m: ArrayLike,
+    u1_m_s: ArrayLike,
+    u2_m_s: ArrayLike,
+    reduced_modulus_Pa: float,
+    *,
+    rel_step: float = 1e-2,
+    **kwargs: Any,
+) -> tuple[MixedContact, np.ndarray]:
+    """Mixed contact at the load ``F`` and its film stiffness ``k_h = -dF/dh_c`` (N/m).
+
+    The load split is solved at ``F``, ``F (1 + e)`` and ``F (1 - e)`` (one vectorised call of
+    :func:`mixed_contact`) and ``k_h`` follows from the three central films by
+    :func:`models.ehl.film.film_stiffness_from_steps` (seed 002's ``k_h = dF/dh_c``). Where the
+    asperities carry nothing this is :func:`models.ehl.film.film_stiffness` with the same step.
+    This is what the decoupling loop (:func:`models.dynamics.tribo_ehl_coupling.contact_cycle`)
+    uses.
+
+    Parameters
+    ----------
+    load_N : array_like
+        Tooth-pair load ``F`` (N), > 0.
+    face_width_m : float
+        Face width ``B`` (m); ``w = F / B``.
+    reduced_radius_m, u1_m_s, u2_m_s, reduced_modulus_Pa
+        As in :func:`mixed_contact`.
+    rel_step : float
+        Relative load step ``e`` (-); the loop's default is 1e-2.
+    **kwargs
+        Passed to :func:`mixed_contact` (lubricant, roughness, inlet temperature, friction
+        constants, thermal switch).
+
+    Returns
+    -------
+    tuple
+        The :class:`MixedContact` at ``F`` and ``k_h`` (N/m), both shaped like the
+        broadcast inputs.
+    """
+    F, R, u1, u2 = np.broadcast_arrays(
+        *(np.asarray(a, float) for a in (load_N, reduced_radius_m, u1_m_s, u2_m_s))
+    )
+    shape = F.shape
+    F, R, u1, u2 = (a.ravel() for a in (F, R, u1, u2))
+    scale = np.repeat([1.0, 1.0 + rel_step, 1.0 - rel_step], F.size)
+    mc = mixed_contact(
+        np.tile(F, 3) * scale / face_width_m,
+        np.tile(R, 3),
+        np.tile(u1, 3),
+        np.tile(u2, 3),
+        reduced_modulus_Pa,
+        **kwargs,
+    )
+    n = F.size
+    h0, hp, hm = mc.h_c_m[:n], mc.h_c_m[n : 2 * n], mc.h_c_m[2 * n :]
+    k = film_stiffness_from_steps(F, hm, h0, hp, rel_step)
+    centre = MixedContact(
+        *(np.asarray(getattr(mc, f.name))[:n].reshape(shape) for f in fields(MixedContact))
+    )
+    return centre, k.reshape(shape)

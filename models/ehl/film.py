@@ -54,6 +54,7 @@ __all__ = [
     "composite_roughness",
     "film_parameter",
     "film_stiffness",
+    "film_stiffness_from_steps",
     "moes_central_film",
     "moes_groups",
     "thermal_reduction_factor",
@@ -210,9 +211,50 @@ def composite_roughness(sigma_1_m: ArrayLike, sigma_2_m: ArrayLike) -> np.ndarra
 def film_parameter(h_c_m: ArrayLike, sigma_1_m: ArrayLike, sigma_2_m: ArrayLike) -> np.ndarray:
     """Film parameter ``Lambda = h_c / sqrt(sigma_1^2 + sigma_2^2)`` (-) (seed 002).
 
-    ``Lambda < 1`` boundary, ``1..3`` mixed, ``> 3`` full film.
+    ``Lambda < 1`` boundary, ``1..3`` mixed, ``> 3`` full film. Seed 002's "surface roughness
+    RMS 0.4 um" is read as each flank's ``sigma`` (composite 0.57 um); if it were the composite
+    value, every ``Lambda`` of the shipped cases would be ``sqrt(2)`` higher.
     """
     return np.asarray(h_c_m, float) / composite_roughness(sigma_1_m, sigma_2_m)
+
+
+def film_stiffness_from_steps(
+    load_N: ArrayLike,
+    h_minus_m: ArrayLike,
+    h_0_m: ArrayLike,
+    h_plus_m: ArrayLike,
+    rel_step: float,
+) -> np.ndarray:
+    r"""Film stiffness ``k_h = -dF/dh_c`` (N/m) from films at ``F (1 - e)``, ``F``, ``F (1 + e)``.
+
+    Seed 002's ``k_h = dF_d/dh_c = (F/h_c) (d ln F / d ln h_c)`` in magnitude,
+
+    .. math:: k_h = \frac{F}{h_c}\left|\frac{d\ln h_c}{d\ln F}\right|^{-1},\qquad
+              \frac{d\ln h_c}{d\ln F} \approx
+              \frac{\ln h_+ - \ln h_-}{\ln(1 + e) - \ln(1 - e)},
+
+    a central difference in ``ln F`` (second order in ``e``). The one implementation of the
+    difference: :func:`film_stiffness` (smooth film) and
+    :func:`models.ehl.asperity.mixed_film_stiffness` (mixed contact, used by the decoupling
+    loop) both call it.
+
+    Parameters
+    ----------
+    load_N : array_like
+        Load ``F`` (N) (or per width: the result then is per width).
+    h_minus_m, h_0_m, h_plus_m : array_like
+        Central film at ``F (1 - e)``, ``F``, ``F (1 + e)`` (m).
+    rel_step : float
+        ``e`` (-), in (0, 1).
+    """
+    if not 0 < rel_step < 1:
+        raise ValueError(f"`rel_step` must be in (0, 1), was {rel_step!r}")
+    F = np.asarray(load_N, float)
+    hm = np.asarray(h_minus_m, float)
+    hp = np.asarray(h_plus_m, float)
+    slope = (np.log(hp) - np.log(hm)) / (math.log1p(rel_step) - math.log1p(-rel_step))
+    with np.errstate(divide="ignore"):
+        return F / (np.asarray(h_0_m, float) * np.abs(slope))
 
 
 def film_stiffness(
@@ -227,13 +269,17 @@ def film_stiffness(
     thermal: bool = True,
     rel_step: float = 1e-3,
 ) -> np.ndarray:
-    r"""Normal stiffness of the EHL film ``k_h = -dF/dh_c`` (N/m), seed 002's model.
+    r"""Normal stiffness of the smooth EHL film ``k_h = -dF/dh_c`` (N/m), seed 002's model.
 
     .. math:: k_h = -\frac{dF}{dh_c} = \frac{F}{h_c}\left|\frac{d\ln h_c}{d\ln F}\right|^{-1}
 
     with ``h_c(F)`` the film of :func:`central_film_thickness` at fixed kinematics (Moes with
-    ``C_t``), the logarithmic slope by a central difference of ``ln F`` (step ``rel_step``).
-    The film is the smooth full film (the asperity share is not included).
+    ``C_t``), the logarithmic slope by :func:`film_stiffness_from_steps` (step ``rel_step``).
+    The film is the smooth full film (no asperity share); the mixed contact's stiffness, which
+    the decoupling loop uses, is :func:`models.ehl.asperity.mixed_film_stiffness` (equal to
+    this one where the asperities carry nothing). Limits: ``k_h = F/h_c`` in the
+    rigid-isoviscous regime (``h ~ 1/F``), ``8 F/h_c`` in the elastic-piezoviscous one
+    (``h ~ F^-1/8``, isothermal).
 
     Parameters
     ----------
@@ -260,5 +306,4 @@ def film_stiffness(
     hp = central_film_thickness(F * (1 + rel_step) / face_width_m, *args).h_c_m
     hm = central_film_thickness(F * (1 - rel_step) / face_width_m, *args).h_c_m
     h0 = central_film_thickness(F / face_width_m, *args).h_c_m
-    slope = (np.log(hp) - np.log(hm)) / (np.log1p(rel_step) - np.log1p(-rel_step))
-    return F / (h0 * np.abs(slope))
+    return film_stiffness_from_steps(F, hm, h0, hp, rel_step)

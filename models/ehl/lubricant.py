@@ -16,22 +16,48 @@ Rheology for Quantitative Elastohydrodynamics*, ch. 6; Habchi, Bair et al. 2010,
         - \frac{1}{1 - R_0}\right)\right],
 
 so that ``mu(p = 0, T_R) = mu_R`` exactly. Seed 002's lubricant table gives all parameters
-(:data:`SEED_002_LUBRICANT`). Note: with these values the Doolittle-Tait initial
-pressure-viscosity coefficient at ``T_R`` is only about 2.9 /GPa, whereas the seed's table also
-quotes ``alpha = 19 /GPa`` for its Moes groups; both are kept as given (the film formula uses
-``alpha``, the viscosity function uses Doolittle-Tait).
+(:data:`SEED_002_LUBRICANT`), with two corrections of the extracted values:
+
+* ``beta_K`` is taken as **6.0e-3 /K**, not the printed 6.0e-4 /K (an extraction error: a
+  decimal place lost). With 6.0e-3, ``K_0 = K_00 exp(-beta_K T_R) = 1.424 GPa`` and the
+  initial pressure-viscosity coefficient of the Doolittle-Tait model at ``T_R``,
+  ``alpha_0 = d ln(mu)/dp |_(p=0)``, is 19.0 /GPa: exactly the table's own
+  ``alpha = 19 /GPa`` (used in the Moes groups). Hand derivation: at ``p = 0`` and ``T_R``
+  ``d(V/V_R)/dp = -1/K_0`` and ``d ln(mu)/d(V/V_R) = -B R_0 / (1 - R_0)^2``, so
+  ``alpha_0 = B R_0 / ((1 - R_0)^2 K_0) = 27.09 / K_0``. With the printed 6.0e-4,
+  ``K_0 = 9.33 GPa`` gives ``alpha_0 = 2.9 /GPa``, inconsistent with the table's 19 /GPa, and a
+  viscosity only 9x the inlet one at 1 GPa (1.6e4x with 6.0e-3): friction collapses.
+* ``mu_R = 1.42 Pa s`` at 348.15 K is kept as the default because the seed prints it, but it is
+  **suspect**: with ``rho_f = 864 kg/m^3`` it is 1640 cSt at 75 degC, over 100x an aerospace
+  turbine/gear oil (MIL-PRF-23699 type oils: about 5 cSt at 100 degC, 10 cSt near 75 degC),
+  and it puts seed 002's own pair in full-film lubrication (``Lambda`` 3.6-7) with a film only 8-38x
+  stiffer than the mesh, against the seed's statements (mixed regime, film stiffness "two
+  orders of magnitude" above the mesh stiffness). 0.142 Pa s (ten times lower, as if a decimal
+  place were lost) reproduces those statements; the shipped case ``seed-002-tribo-mixed`` uses
+  it (:mod:`models.dynamics.tribo_case`).
+
+The Doolittle-Tait viscosity enters only the film's shear stress (friction); the Moes film uses
+``mu(0, T_in)`` and ``alpha``, so ``beta_K`` does not change the film thickness.
 
 Non-Newtonian behaviour: the **Carreau(-Yasuda, a = 2)** generalised-Newtonian model of the seed,
 ``mu_e = mu [1 + (mu gamma_dot / G_cr)^2]^((n - 1)/2)`` with ``n = 0.74`` and
-``G_cr = 31 kPa`` (Bair 2007; seed 002). Not an Eyring model.
+``G_cr = 31 kPa`` (Bair 2007; seed 002). Not an Eyring model. 31 kPa is low for a base oil
+(Newtonian limits of mineral and synthetic base oils are usually of order MPa) but of the order
+reported for polymer-containing oils, whose polymer shear-thins at low stress; it is kept as
+printed. At seed 002's contact pressures the Carreau shear stress then exceeds the limiting
+shear stress almost everywhere, and the friction is set by the limiting-shear cap of
+:func:`models.ehl.mixed_contact` (see there).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
+
+from models.errors import ModelError
 
 __all__ = ["SEED_002_LUBRICANT", "Lubricant"]
 
@@ -43,7 +69,8 @@ class Lubricant:
     Attributes
     ----------
     mu_ref_Pas : float
-        Reference viscosity ``mu_R`` at ``p = 0``, ``T_R`` (Pa s).
+        Reference viscosity ``mu_R`` at ``p = 0``, ``T_R`` (Pa s); seed 002's printed 1.42 is
+        suspect (module docstring).
     T_ref_K : float
         Reference temperature ``T_R`` (K).
     B0, R0 : float
@@ -55,7 +82,8 @@ class Lubricant:
     K00_Pa : float
         Tait bulk modulus ``K_00`` (Pa).
     beta_K_per_K : float
-        Temperature coefficient of ``K_0`` (1/K).
+        Temperature coefficient of ``K_0`` (1/K); 6.0e-3 (seed 002 prints 6.0e-4, an
+        extraction error, see the module docstring).
     a_V_per_K : float
         Volume expansivity ``a_V`` (1/K).
     n_power : float
@@ -75,7 +103,7 @@ class Lubricant:
     epsilon_per_K: float = -8.0e-4
     K0_prime: float = 12.82
     K00_Pa: float = 11.5e9
-    beta_K_per_K: float = 6.0e-4
+    beta_K_per_K: float = 6.0e-3
     a_V_per_K: float = 7.0e-4
     n_power: float = 0.74
     G_cr_Pa: float = 31.0e3
@@ -83,6 +111,31 @@ class Lubricant:
     conductivity_W_mK: float = 0.14
     density_kg_m3: float = 864.0
     specific_heat_J_kgK: float = 2000.0
+
+    def __post_init__(self) -> None:
+        positive = (
+            "mu_ref_Pas",
+            "T_ref_K",
+            "B0",
+            "K0_prime",
+            "K00_Pa",
+            "G_cr_Pa",
+            "alpha_per_Pa",
+            "conductivity_W_mK",
+            "density_kg_m3",
+            "specific_heat_J_kgK",
+        )
+        for name in positive:
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ModelError(f"Lubricant.{name} must be finite and > 0, was {v!r}")
+        if not 0 < self.R0 < 1:
+            raise ModelError(f"Lubricant.R0 must be in (0, 1), was {self.R0!r}")
+        if not 0 < self.n_power <= 1:
+            raise ModelError(f"Lubricant.n_power must be in (0, 1], was {self.n_power!r}")
+        for name in ("epsilon_per_K", "beta_K_per_K", "a_V_per_K"):
+            if not math.isfinite(getattr(self, name)):
+                raise ModelError(f"Lubricant.{name} must be finite")
 
     def relative_volume(self, p_Pa: ArrayLike, T_K: ArrayLike) -> np.ndarray:
         """Tait relative volume ``V / V_R`` (-) at pressure ``p`` (Pa) and temperature ``T`` (K)."""
