@@ -109,6 +109,9 @@ class RecordingBuilder:
         values : numpy.ndarray
             Sample values, or raw integers to be converted with ``conversion``. Kept in their
             own dtype until the channel is built (int16 CAN samples cost 2 bytes each).
+            The builder keeps the array it is given, without a copy (a single gap-free
+            float64 block with no conversion becomes the channel's values as it is): do not
+            modify it afterwards.
         stamp_index, stamps_s : numpy.ndarray, optional
             Logger timestamps (s) and the sample index each belongs to, used only to place
             index 0 on the logger clock and to check the clock.
@@ -260,9 +263,15 @@ class RecordingBuilder:
         gap_at = np.flatnonzero(hole > 0)
         del w_sorted, prev_end, skip_sorted, order, ends, s_sorted
         complete = gap_at.size == 0
-        values = np.empty(span) if complete else np.full(span, np.nan)
+        adopt = _adoptable(blocks, complete, n_dup)
+        if adopt is not None:
+            # One complete float64 block with nothing to convert is the channel already: the
+            # builder owns what add_samples was given, so take it instead of copying it.
+            values = adopt
+        else:
+            values = np.empty(span) if complete else np.full(span, np.nan)
         valid = np.ones(span, bool) if complete else np.zeros(span, bool)
-        for bi, b in enumerate(blocks):
+        for bi, b in enumerate(blocks if adopt is None else []):
             bs = b.starts - first
             bskip = skip[row0[bi] : row0[bi + 1]]
             k = b.raw.shape[1]
@@ -354,6 +363,17 @@ class RecordingBuilder:
                 "points sorted by time, none dropped"
             )
         return SlowSignal(name, parts.unit, t, v)
+
+
+def _adoptable(blocks: list[_Block], complete: bool, n_dup: int) -> np.ndarray | None:
+    """The channel's values if they are one gap-free, duplicate-free float64 block, else None."""
+    if not (complete and n_dup == 0 and len(blocks) == 1):
+        return None
+    b = blocks[0]
+    if b.conversion or b.raw.dtype != np.float64 or b.raw.shape[0] != 1:
+        return None
+    flat = b.raw.reshape(-1)
+    return flat if flat.flags.c_contiguous and flat.flags.writeable else None
 
 
 def _join(blocks: list[np.ndarray]) -> np.ndarray:
