@@ -104,6 +104,7 @@ PARSE_BYTES = 4 << 20
 
 _FILE_HEADER = struct.Struct("<4sLBBBBBBBBQQLL8H8H")
 _CONTAINER = struct.Struct("<H6xL4x")
+_READ_STEP = 1 << 20  # largest single read from the stream (bytes)
 
 
 def sniff(head: bytes) -> bool:
@@ -197,13 +198,30 @@ class _Source:
             n -= len(out)
         if n > 0 and self.error is None:
             try:
-                more = self.stream.read(n)
+                more = self._read_bounded(n)
             except (OSError, EOFError, zlib.error) as exc:  # damaged .gz wrapper
                 self.error = f"{type(exc).__name__}: {exc}"
                 more = b""
             out = out + more if out else more
         self.offset += len(out)
         return out
+
+    def _read_bounded(self, n: int) -> bytes:
+        """``stream.read(n)`` in steps of at most :data:`_READ_STEP` bytes.
+
+        ``BufferedReader.read(n)`` allocates ``n`` bytes before it reads: a container size
+        field that lies (tens of MB in a small file) would cost that much memory.
+        """
+        if n <= _READ_STEP:
+            return self.stream.read(n)
+        parts = []
+        while n > 0:
+            part = self.stream.read(min(n, _READ_STEP))
+            if not part:
+                break
+            parts.append(part)
+            n -= len(part)
+        return b"".join(parts)
 
     def unread(self, data: bytes) -> None:
         self._back = data + self._back
@@ -231,6 +249,30 @@ class _Source:
                 start = i + 1
             keep = min(len(buf), 15 if i < 0 else len(buf) - i)  # a header may straddle
             buf = buf[len(buf) - keep :]
+
+
+def _swallowed_header(src: _Source, body: bytes, pad: bytes) -> int:
+    """Where a container header starts inside ``body + pad``, when the read overran into it.
+
+    Checked only when what follows is not an object header (nor the end of the file): the
+    container's size field lied upwards. Objects inside containers are never containers, so
+    the first ``LOBJ`` header of type ``LOG_CONTAINER`` inside the bytes read (it may straddle
+    into the bytes after them) marks the overrun. Returns its offset in ``body + pad``, or -1.
+    """
+    after = src.read(16)
+    src.unread(after)
+    if not after or after[:4] == _LOBJ:
+        return -1
+    joined = body + pad + after
+    end = len(body) + len(pad)
+    j = joined.find(_LOBJ, 16, end + 3)
+    while 0 <= j < end:
+        if j + 16 <= len(joined):
+            _, hs, hv, size, otype = _OBJ_BASE.unpack_from(joined, j)
+            if otype == _LOG_CONTAINER and hs == 16 and hv == 1 and size >= 32:
+                return j
+        j = joined.find(_LOBJ, j + 1, end + 3)
+    return -1
 
 
 def iter_batches(
@@ -320,7 +362,16 @@ def iter_batches(
             continue
         body = src.read(osize - 16)
         truncated = len(body) < osize - 16
-        src.read(osize % 4)  # padding, as python-can reads it
+        pad = src.read(osize % 4)  # padding, as python-can reads it
+        if not truncated and otype == _LOG_CONTAINER:
+            cut = _swallowed_header(src, body, pad)
+            if cut >= 0:  # the size field is too large: it swallowed the next container's start
+                joined = body + pad
+                src.unread(joined[cut:])
+                body = joined[:cut] if cut < len(body) else body
+                report.warn(f"{path}: container at byte {offset} claims {osize} bytes but the "
+                            f"next container starts at byte {offset + 16 + cut}; read up to "
+                            "there (nothing lost)")
         if otype != _LOG_CONTAINER:
             report.reject(f"blf_object_type_{otype}", 1, f"byte {offset}")
             if truncated:

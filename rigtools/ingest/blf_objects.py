@@ -194,6 +194,17 @@ class _Parser:
                     self.resync = True
                     pos = j + 4
                     continue
+                end = j + osize
+                if end > n or (end + 8 <= n and find(_LOBJ, end, end + 8) < 0):
+                    # The object does not end where another begins: a size field that lies
+                    # would swallow the objects after it. A plausible header inside the body
+                    # gives the lie away; resynchronise there.
+                    k = self._inner_header(buf, j + 16, min(end, n))
+                    if k >= 0:
+                        self.report.reject("corrupt_object", 1, f"byte {origin_of(j)}")
+                        self.resync = True
+                        pos = k
+                        continue
             if j + osize > n:
                 break
             nxt = j + osize
@@ -246,6 +257,16 @@ class _Parser:
                 np.asarray(strides, np.int64), ct) * (np.arange(total) - first_of_run)
             kd = np.repeat(np.asarray(kinds, np.int64), ct, axis=0)
         return offsets, kd[:, 0], kd[:, 1], kd[:, 2], kd[:, 3]
+
+    def _inner_header(self, buf: bytes, start: int, stop: int) -> int:
+        """Offset of the first plausible object header in ``buf[start:stop]``, or -1."""
+        j = buf.find(_LOBJ, start, stop)
+        while j >= 0 and j + 16 <= len(buf):
+            _, _hs, hv, osize, _t = _OBJ_BASE.unpack_from(buf, j)
+            if hv in _HEADER_REST and 16 + _HEADER_REST[hv] <= osize <= self.max_object:
+                return j
+            j = buf.find(_LOBJ, j + 1, stop)
+        return -1
 
     # -- decoding ----------------------------------------------------------------------------
     def parse(self, block: _Block, out: _Columns, final: bool) -> _Block:

@@ -78,8 +78,11 @@ class RecordingBuilder:
         self.path = path
         self.report = report
         self._channels: dict[str, _ChannelParts] = {}
+        self._others: dict[str, list[_ChannelParts]] = {}  # blocks with another unit or rate
         self._slow: dict[str, _SlowParts] = {}
         self._restarts: dict[str, set[int]] = {}
+        # second clocks of a channel, by clock name: (stamp_index parts, stamps_s parts)
+        self._other_clocks: dict[str, dict[str, tuple[list[np.ndarray], list[np.ndarray]]]] = {}
 
     def add_samples(
         self,
@@ -97,7 +100,10 @@ class RecordingBuilder:
         Parameters
         ----------
         channel, unit : str
-            Channel name and unit; a channel keeps the unit and rate of its first block.
+            Channel name and unit. Blocks of one channel that disagree on unit or rate are
+            kept apart; the channel takes the unit and rate that carry the most samples, the
+            other blocks are counted ``inconsistent_channel_layout`` (a damaged rate field in
+            the first block must not cost every intact block after it).
         sample_rate_Hz : float
             Nominal rate (Hz).
         index : int or numpy.ndarray
@@ -123,12 +129,7 @@ class RecordingBuilder:
         if parts is None:
             parts = self._channels[channel] = _ChannelParts(unit, float(sample_rate_Hz))
         elif parts.unit != unit or parts.sample_rate_Hz != float(sample_rate_Hz):
-            self.report.reject("inconsistent_channel_layout", int(np.size(values)))
-            self.report.warn(
-                f"channel {channel!r}: block with unit {unit!r} at {sample_rate_Hz} Hz differs "
-                f"from the first block ({parts.unit!r} at {parts.sample_rate_Hz} Hz); dropped"
-            )
-            return
+            parts = self._variant(channel, unit, float(sample_rate_Hz))
         vals = np.asarray(values)
         if vals.size == 0:
             return
@@ -151,12 +152,70 @@ class RecordingBuilder:
             parts.stamp_index.append(np.asarray(stamp_index, np.int64))
             parts.stamps.append(np.asarray(stamps_s, np.float64))
 
+    def _variant(self, channel: str, unit: str, sample_rate_Hz: float) -> _ChannelParts:
+        """The parts of ``channel`` with another unit or rate than its first block."""
+        others = self._others.setdefault(channel, [])
+        for p in others:
+            if p.unit == unit and p.sample_rate_Hz == sample_rate_Hz:
+                return p
+        others.append(_ChannelParts(unit, sample_rate_Hz))
+        return others[-1]
+
+    def _choose_layout(self, name: str, parts: _ChannelParts) -> _ChannelParts:
+        """Of a channel's layouts (unit, rate), the one with most samples; count the rest."""
+        candidates = [parts, *self._others.pop(name, [])]
+        best = max(candidates, key=lambda p: p.n_samples)  # ties: the first block's layout
+        for p in candidates:
+            if p is not best and p.n_samples:
+                self.report.reject("inconsistent_channel_layout", p.n_samples,
+                                   f"channel {name!r}")
+                self.report.warn(
+                    f"channel {name!r}: {p.n_samples} sample(s) in blocks with unit {p.unit!r} "
+                    f"at {p.sample_rate_Hz} Hz differ from the {best.n_samples} of the channel "
+                    f"({best.unit!r} at {best.sample_rate_Hz} Hz); dropped"
+                )
+        return best
+
     def add_clock(self, channel: str, stamp_index: np.ndarray, stamps_s: np.ndarray) -> None:
         """Add logger timestamps of a channel (and the sample index each belongs to)."""
         parts = self._channels.get(channel)
         if parts is not None and np.size(stamps_s):
             parts.stamp_index.append(np.asarray(stamp_index, np.int64))
             parts.stamps.append(np.asarray(stamps_s, np.float64))
+
+    def add_other_clock(
+        self, channel: str, clock: str, stamp_index: np.ndarray, stamps_s: np.ndarray
+    ) -> None:
+        """Add stamps of a second clock of a channel, one that does not place it.
+
+        A source may stamp each sample twice (an MCAP message: its header stamp and its log
+        time). The clock given to :meth:`add_samples` places the channel; this one is only
+        compared with the counter time base: when the channel is built,
+        ``report.timebase[f"{channel}@{clock}"]`` holds the same statistics as the channel's
+        own entry (see :func:`~rigtools.ingest.timebase.timebase_check`) plus
+        ``start_time_s`` (time of sample index 0 on this clock, s) and ``offset_s`` (that
+        minus the channel's ``start_time_s``: the median of this clock minus the channel's
+        clock, s). Non-finite stamps are ignored.
+        """
+        if not np.size(stamps_s):
+            return
+        idx, st = self._other_clocks.setdefault(channel, {}).setdefault(clock, ([], []))
+        idx.append(np.asarray(stamp_index, np.int64))
+        st.append(np.asarray(stamps_s, np.float64))
+
+    def _check_other_clocks(self, name: str, sample_rate_Hz: float, t0: float) -> None:
+        """Fill ``report.timebase[f"{name}@{clock}"]`` for each second clock of a channel."""
+        for clock, (idx, st) in sorted(self._other_clocks.pop(name, {}).items()):
+            si, ts = _join(idx), _join(st)
+            if si.size > MAX_CLOCK_POINTS:
+                pick = np.linspace(0, si.size - 1, MAX_CLOCK_POINTS).astype(np.int64)
+                si, ts = si[pick], ts[pick]
+            t1, stats = timebase_check(si, ts, sample_rate_Hz)
+            if not stats:  # no finite stamp
+                continue
+            stats["start_time_s"] = float(t1)
+            stats["offset_s"] = float(t1 - t0)
+            self.report.timebase[f"{name}@{clock}"] = stats
 
     def mark_restart(self, channel: str, index: int) -> None:
         """Note that the source's counter restarted at sample ``index`` (gap kind "restart")."""
@@ -181,7 +240,7 @@ class RecordingBuilder:
         """Lay every channel on its grid and return the Recording."""
         channels = {}
         for name in sorted(self._channels):
-            ch = self._build_channel(name, self._channels.pop(name))
+            ch = self._build_channel(name, self._choose_layout(name, self._channels.pop(name)))
             if ch is not None:
                 channels[name] = ch
         slow = {}
@@ -333,6 +392,7 @@ class RecordingBuilder:
                 )
         else:
             t0 = 0.0
+        self._check_other_clocks(name, parts.sample_rate_Hz, float(t0))
         for p in gap_at:
             start = int(e_sorted[p])
             end = start + int(hole[p])

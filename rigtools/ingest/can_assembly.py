@@ -193,6 +193,10 @@ def _finish_uniform(
         del counters
         if un.n_duplicate:
             report.reject("duplicate_frame", un.n_duplicate, f"channel {name!r}")
+        if un.n_outlier:
+            report.reject("counter_outlier", un.n_outlier, f"channel {name!r}")
+            report.warn(f"channel {name!r}: {un.n_outlier} frame(s) carry a sample counter "
+                        "that disagrees with both neighbouring frames (corrupted); dropped")
         if un.n_reordered:
             report.warn(f"channel {name!r}: {un.n_reordered} frame(s) arrived out of order; "
                         "placed by their sample counter")

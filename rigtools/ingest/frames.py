@@ -157,11 +157,12 @@ def from_messages(
         np.fromiter((m.is_fd for m in messages), bool, n),  # type: ignore[attr-defined]
         length,
         data,
-        np.fromiter(
-            (m.channel if isinstance(m.channel, int) else -1 for m in messages),  # type: ignore[attr-defined]
-            np.int16,
-            n,
-        ),
+        np.fromiter((_bus(m.channel) for m in messages), np.int16, n),  # type: ignore[attr-defined]
         np.asarray(positions, np.int64),
         position_unit,
     )
+
+
+def _bus(channel: object) -> int:
+    """python-can's ``Message.channel`` as a bus number: an int16, else -1 (unknown)."""
+    return channel if isinstance(channel, int) and -1 <= channel <= 32767 else -1

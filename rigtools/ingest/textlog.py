@@ -32,6 +32,8 @@ _BLOCK_BYTES: Final[int] = 1 << 16
 _MAX_ERRORS_BEFORE_DATA: Final[int] = 20
 #: Consecutive python-can errors after which the rest of the file is counted, not parsed.
 _MAX_ERRORS_IN_ROW: Final[int] = 1000
+#: Largest CAN identifier (29-bit extended); python-can parses any hex number of a line.
+_MAX_CAN_ID: Final[int] = 0x1FFFFFFF
 #: Exceptions python-can raises on malformed lines (int()/float() parsing, tuple unpacking,
 #: missing columns, an unsupported dialect).
 _PARSE_ERRORS: Final = (ValueError, IndexError, KeyError, TypeError, NotImplementedError,
@@ -328,6 +330,9 @@ def _run(
         elif dialect.payload_short(msg):
             report.reject("unparsable_line", 1, where)
             acc.short += 1
+        elif not 0 <= msg.arbitration_id <= _MAX_CAN_ID:
+            report.reject("unparsable_line", 1, where)
+            acc.bad_id += 1
         else:
             messages.append(msg)
             positions.append(number)
@@ -383,6 +388,7 @@ class _Accounting:
         self.n_errors = 0
         self.first_error: tuple[int | None, str, BaseException] = (None, "", ValueError())
         self.short = 0
+        self.bad_id = 0
 
     def settle(self, lines: Iterable[tuple[int, str]]) -> None:
         for number, text in lines:
@@ -413,6 +419,11 @@ class _Accounting:
             self.report.warn(
                 f"{path}: {self.short} frame line(s) carry fewer payload bytes than their "
                 "DLC (truncated lines); counted as unparsable_line"
+            )
+        if self.bad_id:
+            self.report.warn(
+                f"{path}: {self.bad_id} frame line(s) carry an identifier above 0x1FFFFFFF "
+                "(29 bits, the largest CAN identifier); counted as unparsable_line"
             )
         if self.n_events:
             self.report.warn(

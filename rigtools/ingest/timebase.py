@@ -14,7 +14,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["UnwrappedCounter", "indices_from_stamps", "timebase_check", "unwrap_counter"]
+__all__ = [
+    "UnwrappedCounter",
+    "counter_outliers",
+    "indices_from_stamps",
+    "timebase_check",
+    "unwrap_counter",
+]
 
 
 @dataclass(frozen=True)
@@ -37,6 +43,10 @@ class UnwrappedCounter:
     clock_jumps : int
         Steps where the logger clock jumped by more than half a wrap while the counter went on
         at its usual step: the clock was ignored there.
+    n_outlier : int
+        Elements whose counter disagrees with both neighbours and with the logger clock while
+        the neighbours agree with each other (a corrupted counter, :func:`counter_outliers`);
+        not kept (``keep`` is ``False``, their tick is that of the element before).
     """
 
     ticks: np.ndarray
@@ -45,10 +55,67 @@ class UnwrappedCounter:
     n_reordered: int
     restarts: np.ndarray
     clock_jumps: int = 0
+    n_outlier: int = 0
 
 
 #: Consecutive usual steps that mark a backwards counter step as a restart, not a late frame.
 RESTART_RUN = 8
+
+
+def counter_outliers(
+    counter: np.ndarray,
+    modulus: int,
+    stamps_s: np.ndarray | None = None,
+    tick_rate_Hz: float | None = None,
+) -> np.ndarray:
+    """Elements of a modular counter whose value is corrupted, told by the logger clock.
+
+    Element ``i`` is an outlier when the counter steps from ``i - 1`` to ``i + 1`` by exactly
+    two usual steps (the neighbours agree with each other) while on both steps through ``i``
+    the counter says something else than the usual step and the logger clock says the usual
+    step (it is closer to it than to the counter's step). A lost frame or a late frame
+    moves counter and clock together; a flipped counter bit moves the counter alone. The
+    first and the last element are outliers when the clock says the usual step, the counter
+    another, and the :data:`RESTART_RUN` steps on their inner side are usual. Without this a
+    single corrupted value reads as a restart (a step back followed by usual steps) and every
+    later sample is shifted.
+
+    Parameters
+    ----------
+    counter : numpy.ndarray
+        Raw counter values in ``[0, modulus)``, in arrival order.
+    modulus : int
+        Counter modulus.
+    stamps_s : numpy.ndarray, optional
+        Logger timestamps (s). Without them (or the rate) no element is an outlier.
+    tick_rate_Hz : float, optional
+        Nominal counter rate (ticks per second).
+
+    Returns
+    -------
+    numpy.ndarray
+        Boolean mask, ``True`` at outliers.
+    """
+    c = np.asarray(counter).astype(np.int64, copy=False)
+    n = c.shape[0]
+    out = np.zeros(n, bool)
+    if n < 3 or stamps_s is None or tick_rate_Hz is None:
+        return out
+    m = int(modulus)
+    d = np.diff(c) % m
+    typical = max(1, int(np.median(d)))
+    step = np.where(d > m // 2, d - m, d)
+    with np.errstate(invalid="ignore", over="ignore"):
+        clock = np.diff(np.asarray(stamps_s, np.float64)) * float(tick_rate_Hz)
+        clock_says_usual = np.isfinite(clock) & (np.abs(clock - typical) < np.abs(clock - step))
+    out[1:-1] = (clock_says_usual[:-1] & clock_says_usual[1:]
+                 & (((c[2:] - c[:-2]) % m) == (2 * typical) % m))
+    if n > RESTART_RUN + 1:
+        if clock_says_usual[0] and np.all(d[1 : RESTART_RUN + 1] == typical):
+            out[0] = True
+        if clock_says_usual[-1] and np.all(d[-RESTART_RUN - 1 : -1] == typical):
+            out[-1] = True
+    return out
 
 
 def unwrap_counter(
@@ -80,20 +147,49 @@ def unwrap_counter(
     The counter is the authority. Each step ``d = (c[i] - c[i-1]) mod M`` is taken as ``d``
     ticks forward when ``0 < d <= M/2``, a duplicate when the tick was already received, and
     a step backwards (a late frame, placed by its counter) otherwise. A step backwards
-    followed by a steady run of usual steps is a counter restart, resynchronised to continue.
+    followed by a steady run of usual steps is a counter restart, resynchronised to continue,
+    unless the logger clock stepped back with it (by half a tick or more, over the step or
+    over the step and the next): that is a run of records logged twice (a duplicated block,
+    a replayed container), whose ticks fall on ticks already received and are dropped as
+    duplicates.
 
     The logger clock is consulted only where frames were lost (``d`` differs from the usual
     step) and it says more than half a wrap went by: the step is then ``d + k M`` with ``k``
     the whole number of wraps closest to the elapsed time. A clock that says so while the
     counter continues with its usual step has jumped (a clock adjustment), and is ignored; a
     stamp that jumps and comes back (an outlier) is ignored too.
+
+    Corrupted counter values (:func:`counter_outliers`) are set aside first and the rest is
+    unwrapped without them, so one flipped bit costs one frame, not the alignment of every
+    frame after it.
     """
     c = np.asarray(counter).astype(np.int64, copy=False)
     n = c.shape[0]
     if n == 0:
         empty = np.zeros(0, np.int64)
         return UnwrappedCounter(empty, np.zeros(0, bool), 0, 0, empty)
-    m = int(modulus)
+    outlier = counter_outliers(c, modulus, stamps_s, tick_rate_Hz)
+    if outlier.any():
+        good = np.flatnonzero(~outlier)
+        sub = _unwrap(c[good], int(modulus),
+                      None if stamps_s is None else np.asarray(stamps_s, np.float64)[good],
+                      tick_rate_Hz)
+        ticks = np.empty(n, np.int64)
+        ticks[good] = sub.ticks
+        prev = np.maximum.accumulate(np.where(outlier, -1, np.arange(n)))
+        ticks[outlier] = np.where(prev[outlier] >= 0, ticks[np.maximum(prev[outlier], 0)],
+                                  sub.ticks[0])
+        keep = np.zeros(n, bool)
+        keep[good] = sub.keep
+        return UnwrappedCounter(ticks, keep, sub.n_duplicate, sub.n_reordered,
+                                good[sub.restarts], sub.clock_jumps, int(outlier.sum()))
+    return _unwrap(c, int(modulus), stamps_s, tick_rate_Hz)
+
+
+def _unwrap(
+    c: np.ndarray, m: int, stamps_s: np.ndarray | None, tick_rate_Hz: float | None
+) -> UnwrappedCounter:
+    n = c.shape[0]
     d = np.diff(c) % m
     typical = max(1, int(np.median(d))) if d.size else 1
     step = np.where(d > m // 2, d - m, d)
@@ -120,6 +216,8 @@ def unwrap_counter(
     for p in np.flatnonzero(step < 0):
         following = d[p + 1 : p + 1 + RESTART_RUN]
         if following.size == RESTART_RUN and np.all(following == typical):
+            if expected is not None and _clock_went_back(expected, int(p)):
+                continue  # the clock went back with the counter: a replayed run, not a restart
             step[p] = typical
             if expected is not None and np.isfinite(expected[p]) and expected[p] > 0:
                 step[p] = max(1, min(round(expected[p]), 1 << 40))
@@ -140,6 +238,17 @@ def unwrap_counter(
     return UnwrappedCounter(ticks, keep, int(np.count_nonzero(same)),
                             int(np.count_nonzero(late & keep)),
                             np.asarray(restarts, np.int64), clock_jumps)
+
+
+def _clock_went_back(expected: np.ndarray, p: int) -> bool:
+    """True when the logger clock steps back by half a tick or more at step ``p``.
+
+    Looked at over one step and over two (from element ``p`` to ``p + 2``): the first element
+    after the step may itself be damaged (a broken record carrying another frame's stamp).
+    """
+    one = expected[p]
+    two = expected[p] + expected[p + 1] if p + 1 < expected.size else np.nan
+    return bool((np.isfinite(one) and one <= -0.5) or (np.isfinite(two) and two <= -0.5))
 
 
 def indices_from_stamps(stamps_s: np.ndarray, sample_rate_Hz: float) -> np.ndarray:
