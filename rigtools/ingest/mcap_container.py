@@ -29,14 +29,41 @@ are listed in :mod:`rigtools.ingest.mcap`.
 Messages of a refused chunk are counted by the entries of the message indexes that follow
 it when the file has them; otherwise the chunk counts as one. A message whose channel is not
 defined where it appears (its Channel record was in a refused chunk) is held, and read at the
-end of the file if the summary's repeated Channel records define it.
+end of the file if the summary's repeated Channel records define it. Likewise a Channel
+record naming a schema not defined yet (its Schema record damaged or missing) is held, and
+its messages with it, until the Schema record comes (later, or in the summary): a channel is
+never handed on with a schema still to come.
+
+Damaged length fields and definitions (issue 12) are handled when the stream can be read at a
+position (a regular file, a ``BytesIO``; not a ``gzip`` stream, which ends at the first lie
+as before, counted ``truncated_record``):
+
+* **Resynchronisation.** A record is read only if its length ends at the end of the file or
+  at a record header whose length fits in the file. Otherwise: a Chunk record is read with the
+  length its own fields imply (header and compressed records; its CRC then vouches for the
+  records) when that length leads to a plausible record; any other record is skipped up to the
+  first position after it where :data:`_SYNC_RECORDS` plausible records (a defined opcode
+  first, lengths within the file) follow each other, counted once as ``lost_sync``. A length
+  that grew over intact records is caught by searching its claimed content for such a chain.
+  A record reading as a Footer without the closing magic after it is resynchronised past too.
+  A chunk both of whose lengths end past the file is a cut chunk: the walk ends there as
+  before, and the records inside a cut uncompressed chunk are not read.
+* **The summary first.** Before the walk, the Footer is read and, when the summary CRC checks,
+  the Schema and Channel records of the summary are kept: a data-section copy that differs
+  (damaged, yet parseable) is replaced by them, with a warning, before any message of the
+  channel is handed on. Without a summary CRC (0) or when it fails, which copy is damaged
+  cannot be told and the first definition is kept, as in a stream. A Footer whose offsets point
+  outside the file is warned about.
 """
 
 from __future__ import annotations
 
+import zlib
 from collections.abc import Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any, BinaryIO, Final, NamedTuple, TypeAlias, TypeVar
+
+import numpy as np
 
 from rigtools.errors import RecordingFormatError
 from rigtools.ingest.mcap_decompress import (
@@ -46,6 +73,9 @@ from rigtools.ingest.mcap_decompress import (
     check_chunk_size,
 )
 from rigtools.ingest.mcap_records import (
+    CHUNK_HEAD_MAX_BYTES,
+    FOOTER_AND_MAGIC_BYTES,
+    KNOWN_OPS,
     MAGIC,
     MESSAGE_HEADER,
     MESSAGE_HEADER_BYTES,
@@ -65,9 +95,11 @@ from rigtools.ingest.mcap_records import (
     ChannelRecord,
     MalformedRecordError,
     SchemaRecord,
+    chunk_content_length,
     message_index_entry_count,
     parse_channel,
     parse_chunk_header,
+    parse_footer,
     parse_metadata,
     parse_schema,
     statistics_message_count,
@@ -103,6 +135,12 @@ _MAX_WARNINGS_PER_REASON: Final = 5
 _RUN_MIN: Final = 8
 #: How many top-level records the look-ahead for the next chunk steps over at most.
 _LOOKAHEAD_RECORDS: Final = 64
+#: A position is taken for the start of a record when this many records follow each other
+#: from it (known opcode, length within the file), or fewer ending at the Footer or the end.
+_SYNC_RECORDS: Final = 4
+#: The search for the next plausible record reads the file in pieces of this many bytes.
+_SCAN_BYTES: Final = 256 << 10
+_KNOWN_OPS_ARRAY: Final = np.array(sorted(KNOWN_OPS), np.uint8)
 
 #: The outcome of a chunk record's content: its uncompressed records (None when it has none
 #: or is refused), the refusal (reason, detail) if any, and the CRC still to check (None when
@@ -186,9 +224,11 @@ class ContainerScanner(ChunkRecordWalk):
     Attributes
     ----------
     schemas : dict of int to SchemaRecord
-        Schemas by id, as far as the walk has come (first definition kept).
+        Schemas by id, as far as the walk has come (first definition kept, unless the
+        CRC-checked summary holds another: see the module docstring).
     channels : dict of int to ChannelRecord
-        Channels by id, likewise.
+        Channels by id, likewise; a channel whose schema is not defined yet is not here
+        until it is (or until the end of the file).
     metadata : dict of str to dict
         Key/values of the Metadata records, by record name.
     statistics_message_count : int or None
@@ -219,6 +259,14 @@ class ContainerScanner(ChunkRecordWalk):
         self._worker: ThreadPoolExecutor | None = None
         self._worker_decompressor = ChunkDecompressor()
         self._worker_crc = True
+        # Schema and Channel records of the summary section when its CRC checks (seekable
+        # streams only): they win over a differing copy in the data section
+        self._summary_schemas: dict[int, SchemaRecord] = {}
+        self._summary_channels: dict[int, ChannelRecord] = {}
+        # Channel records waiting for the Schema record they name (their messages are held)
+        self._unsettled: dict[int, ChannelRecord] = {}
+        # no plausible record starts at or after this position (a search found none)
+        self._no_sync_from = 1 << 64
 
     # -- accounting ----------------------------------------------------------------------
 
@@ -252,6 +300,17 @@ class ContainerScanner(ChunkRecordWalk):
 
     # -- records -------------------------------------------------------------------------
 
+    def _checked(self, rec: _Record, kind: str, where: str,
+                 checked: dict[int, _Record]) -> _Record:
+        """``rec``, or its copy in the CRC-checked summary when they differ."""
+        good = checked.get(rec.id)
+        if good is not None and good != rec:
+            self._warn(f"{kind}_damaged", f"{self.path}: {kind} id {rec.id} at {where} differs "
+                       "from its copy in the summary section, whose CRC checks; the summary's "
+                       "copy is used")
+            return good
+        return rec
+
     def _keep_first(self, table: dict[int, _Record], rec: _Record, kind: str,
                     where: str) -> None:
         old = table.setdefault(rec.id, rec)
@@ -266,7 +325,11 @@ class ContainerScanner(ChunkRecordWalk):
             self._malformed("Schema", where, exc)
             return
         if rec.id != 0:
+            rec = self._checked(rec, "schema", where, self._summary_schemas)
             self._keep_first(self.schemas, rec, "schema", where)
+            for cid, ch in list(self._unsettled.items()):
+                if ch.schema_id == rec.id:
+                    self.channels.setdefault(cid, self._unsettled.pop(cid))
 
     def _channel(self, buf: Any, pos: int, end: int, where: str) -> None:
         try:
@@ -274,6 +337,21 @@ class ContainerScanner(ChunkRecordWalk):
         except MalformedRecordError as exc:
             self._malformed("Channel", where, exc)
             return
+        rec = self._checked(rec, "channel", where, self._summary_channels)
+        sid = rec.schema_id
+        if sid and sid not in self.schemas and rec.id not in self.channels:
+            if sid in self._summary_schemas:
+                # its Schema record is lost (damaged or missing) before it: the summary's
+                # copy settles the schema before any of the channel's messages goes on
+                self.schemas[sid] = self._summary_schemas[sid]
+                self._warn("schema_from_summary", f"{self.path}: schema id {sid} of channel "
+                           f"{rec.id} ({where}) is not defined before it; its copy in the "
+                           "summary is used")
+            else:
+                # held until its Schema record comes (later in the file, or in the summary):
+                # its messages are held meanwhile, so they are all read with the schema
+                self._unsettled.setdefault(rec.id, rec)
+                return
         self._keep_first(self.channels, rec, "channel", where)
 
     def _metadata(self, buf: bytes, where: str) -> None:
@@ -317,6 +395,9 @@ class ContainerScanner(ChunkRecordWalk):
         self._deferred.append(((cid, seq, lt, pt, memoryview(bytes(data)), -1), where))
 
     def _release_deferred(self) -> list[ScannedMessage]:
+        for cid, ch in self._unsettled.items():  # their schema never came: read without
+            self.channels.setdefault(cid, ch)
+        self._unsettled = {}
         out = []
         for msg, where in self._deferred:
             if msg[0] in self.channels:
@@ -325,14 +406,19 @@ class ContainerScanner(ChunkRecordWalk):
                 self._unknown_channel(msg[0], where)
         if out:
             self.report.warn(f"{self.path}: {len(out)} message(s) came before the Channel "
-                             "record defining their channel (found in the summary); they were "
-                             "read last")
+                             "or Schema record defining their channel (found in the summary or "
+                             "later in the file); they were read last")
         self._deferred = []
         self._deferred_bytes = 0
         return out
 
     def _unknown_channel(self, cid: int, where: str) -> None:
         self.report.reject("unknown_channel", 1, where)
+        if cid in self._unsettled:
+            self._warn("unknown_channel", f"{self.path}: message at {where} of channel id "
+                       f"{cid}, whose schema is not defined yet, is beyond the "
+                       f"{MAX_DEFERRED_BYTES} bytes held until it is")
+            return
         self._warn("unknown_channel", f"{self.path}: message at {where} names channel id {cid}, "
                    "which no Channel record in the file defines")
 
@@ -362,6 +448,11 @@ class ContainerScanner(ChunkRecordWalk):
                 self.path, 0, f"the MCAP magic {MAGIC!r}",
                 "an empty file" if not head else repr(head),
             )
+        peek = src.can_peek
+        size = src.size or 0
+        look, unpack_hdr = src.look, RECORD_HEADER.unpack
+        if peek:
+            self._read_summary()
         direct: list[ScannedMessage] = []
         direct_pos = ""
         data_end = False
@@ -382,6 +473,26 @@ class ContainerScanner(ChunkRecordWalk):
             first = False
             if op != OP_MESSAGE_INDEX:
                 self._flush_pending()
+            if peek and op == OP_FOOTER and not self._is_footer(pos, length):
+                # a damaged opcode that reads 0x02 would end the walk
+                nxt = self._scan(pos + 1, size)
+                if nxt is not None:
+                    self._lost_sync(pos, nxt, f"it reads as a Footer of {length} bytes, but no "
+                                    "closing magic follows it")
+                    src.seek(nxt)
+                    continue
+            elif peek:
+                # fast path of _sync: a known record whose length ends at the end of the file
+                # or at a record header whose length fits in the file
+                q = pos + RECORD_HEADER_BYTES + length
+                left = size - q - RECORD_HEADER_BYTES
+                if op == OP_CHUNK or op not in KNOWN_OPS or q > size or (
+                        q != size and (left < 0 or unpack_hdr(look(q, RECORD_HEADER_BYTES))[1]
+                                       > left)):
+                    length, jump = self._sync(pos, op, length)
+                    if jump is not None:
+                        src.seek(jump)
+                        continue
             rem = src.remaining()
             if rem is not None and length > rem:
                 self._ended(pos, data_end, f"a record of {length} bytes (opcode 0x{op:02x})",
@@ -478,6 +589,176 @@ class ContainerScanner(ChunkRecordWalk):
         if late:
             yield MessageBlock.from_messages("the end of the file (deferred messages)", late)
         self._cross_check()
+
+    # -- a record whose length field lies (seekable streams) -----------------------------
+
+    def _read_summary(self) -> None:
+        """Keep the Schema and Channel records of the summary section, if its CRC checks.
+
+        They then win over a differing (damaged) copy in the data section, before any
+        message is handed on, so a damaged definition never decides how a channel is read.
+        Without a summary CRC (0) nothing is kept: which copy is damaged cannot be told. A
+        Footer whose offsets point outside the file is warned about.
+        """
+        src = self._src
+        total = src.size
+        if total is None or total < len(MAGIC) + FOOTER_AND_MAGIC_BYTES:
+            return
+        fpos = total - FOOTER_AND_MAGIC_BYTES
+        footer = parse_footer(src.peek(fpos, FOOTER_AND_MAGIC_BYTES))
+        if footer is None:
+            return
+        start, offset_start, crc, footer_head = footer
+        for name, at in (("summary start", start), ("summary offset start", offset_start)):
+            if at != 0 and not len(MAGIC) <= at <= fpos:
+                self.report.warn(f"{self.path}: the Footer's {name} ({at}) points outside the "
+                                 f"records of the file (bytes {len(MAGIC)} to {fpos}); the "
+                                 "summary section is not used")
+                return
+        if start == 0 or crc == 0:
+            return
+        summary = src.peek(start, fpos - start)
+        if zlib.crc32(footer_head, zlib.crc32(summary)) != crc:
+            self.report.warn(f"{self.path}: the summary section (byte {start}) does not match "
+                             "the Footer's CRC; its Schema and Channel records are not preferred")
+            return
+        p = 0
+        while len(summary) - p >= RECORD_HEADER_BYTES:
+            op, length = RECORD_HEADER.unpack_from(summary, p)
+            body = p + RECORD_HEADER_BYTES
+            if length > len(summary) - body:
+                break
+            try:
+                if op == OP_SCHEMA:
+                    sch = parse_schema(summary, body, body + length)
+                    self._summary_schemas.setdefault(sch.id, sch)
+                elif op == OP_CHANNEL:
+                    ch = parse_channel(summary, body, body + length)
+                    self._summary_channels.setdefault(ch.id, ch)
+            except MalformedRecordError:
+                pass  # the CRC checks: a writer's fault, met again (and counted) by the walk
+            p = body + length
+
+    def _sync(self, pos: int, op: int, length: int) -> tuple[int, int | None]:
+        """Check a record's length against the records around it; resynchronise if it lies.
+
+        Returns the length to read the record with and None, or the position of the next
+        plausible record (the walk goes on there) when this one is not read. Called when the
+        walk's fast check fails (the record is a Chunk, has an opcode the specification does
+        not define, or its length does not end at the end of the file or at a record header
+        whose length fits). Three cases:
+
+        * A Chunk record whose length does not lead to a plausible record while the length
+          its own fields imply (header + compressed records) does: read with the latter (the
+          chunk's CRC still vouches for its records).
+        * A length past the end of the file, or an unknown opcode whose length does not lead
+          to a plausible record: the walk resumes at the first position after ``pos`` where
+          :data:`_SYNC_RECORDS` plausible records follow each other (counted ``lost_sync``).
+        * Any other record (but a Chunk) whose length leads to no plausible record: if such a
+          chain starts inside its claimed content, its length lied (grew) and the walk
+          resumes there; otherwise the next record is the damaged one and this one is read.
+        """
+        src = self._src
+        total = src.size
+        assert total is not None
+        body = pos + RECORD_HEADER_BYTES
+        fits = length <= total - body
+        if op == OP_CHUNK and not (fits and self._chain(body + length, 2)):
+            implied = chunk_content_length(
+                src.look(body, min(CHUNK_HEAD_MAX_BYTES, total - body)))
+            if implied is not None and implied > total - body and not fits:
+                return length, None  # both lengths end past the file: a cut chunk
+            if implied is not None and implied <= total - body and \
+                    self._chain(body + implied, 2):
+                self._warn("chunk_length", f"{self.path}: the Chunk record at byte {pos} "
+                           f"claims {length} bytes, its own fields {implied}; read with the "
+                           "latter")
+                return implied, None
+        plausible_op = op in KNOWN_OPS or op >= 0x80
+        if not fits or not (plausible_op or self._chain(body + length, 2)):
+            nxt = self._scan(pos + 1, total)
+            if nxt is None:
+                return length, None
+            self._lost_sync(pos, nxt, f"its header (opcode 0x{op:02x}, {length} bytes) does "
+                            f"not fit the file ({total - body} bytes left)")
+            return length, nxt
+        if op != OP_CHUNK and not self._chain(body + length, 1):
+            nxt = self._scan(body, body + length)
+            if nxt is not None:
+                self._lost_sync(pos, nxt, f"its length ({length} bytes) leads to no record, "
+                                f"one starts at byte {nxt}")
+                return length, nxt
+        return length, None
+
+    def _is_footer(self, pos: int, length: int) -> bool:
+        """True when the record at ``pos`` has a Footer's length and the magic follows it."""
+        end = pos + RECORD_HEADER_BYTES + length
+        return length == FOOTER_AND_MAGIC_BYTES - len(MAGIC) - RECORD_HEADER_BYTES and \
+            self._src.look(end, len(MAGIC)) == MAGIC
+
+    def _chain(self, p: int, n: int, known_first: bool = False) -> bool:
+        """True when ``n`` plausible records follow each other from ``p``.
+
+        Plausible: a length within the file, and (for the first record when ``known_first``)
+        an opcode the specification defines; other opcodes are allowed further on, as a
+        writer may add records of its own. Fewer are enough when they end at a Footer or
+        exactly at the end of the file.
+        """
+        src = self._src
+        total = src.size
+        assert total is not None
+        for i in range(n):
+            if p == total:
+                return True
+            if total - p < RECORD_HEADER_BYTES:
+                return False
+            op, length = RECORD_HEADER.unpack(src.look(p, RECORD_HEADER_BYTES))
+            if length > total - p - RECORD_HEADER_BYTES or (
+                    known_first and i == 0 and op not in KNOWN_OPS):
+                return False
+            if op == OP_FOOTER:
+                return self._is_footer(p, length)
+            p += RECORD_HEADER_BYTES + length
+        return True
+
+    def _scan(self, start: int, stop: int) -> int | None:
+        """The first position in ``[start, stop)`` where a chain of plausible records starts.
+
+        A search to the end of the file that finds none is remembered: no later search from
+        beyond its start reads the file again (the walk stays linear in the file size).
+        """
+        src = self._src
+        to_end = stop == src.size
+        if to_end and start >= self._no_sync_from:
+            return None
+        total = src.size
+        assert total is not None
+        p = start
+        while p < stop:
+            n = min(_SCAN_BYTES, stop - p)
+            # candidates: a defined opcode and a length within the file (array operations)
+            buf = src.peek(p, n + RECORD_HEADER_BYTES - 1)
+            m = min(n, len(buf) - RECORD_HEADER_BYTES + 1)
+            if m <= 0:
+                break
+            ops = np.frombuffer(buf, np.uint8, m)
+            lengths = np.ndarray((m,), "<u8", buf, 1, (1,))
+            room = np.arange(total - p - RECORD_HEADER_BYTES, total - p - RECORD_HEADER_BYTES - m,
+                             -1, dtype=np.int64).astype(np.uint64)
+            cand = np.flatnonzero(np.isin(ops, _KNOWN_OPS_ARRAY) & (lengths <= room))
+            for i in cand.tolist():
+                if self._chain(p + i, _SYNC_RECORDS, known_first=True):
+                    return p + i
+            p += n
+        if to_end:
+            self._no_sync_from = min(self._no_sync_from, start)
+        return None
+
+    def _lost_sync(self, pos: int, nxt: int, why: str) -> None:
+        self.report.reject("lost_sync", 1, f"byte {pos}")
+        self._warn("lost_sync", f"{self.path}: the record at byte {pos} is not read: {why}; "
+                   f"bytes {pos} to {nxt} skipped, the walk goes on at the next plausible "
+                   f"record (byte {nxt})")
 
     # -- the chunk read ahead ------------------------------------------------------------
 

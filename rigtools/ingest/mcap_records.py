@@ -26,6 +26,9 @@ from dataclasses import dataclass, field
 from typing import Any, Final, NamedTuple
 
 __all__ = [
+    "CHUNK_HEAD_MAX_BYTES",
+    "FOOTER_AND_MAGIC_BYTES",
+    "KNOWN_OPS",
     "MAGIC",
     "MESSAGE_HEADER",
     "MESSAGE_HEADER_BYTES",
@@ -46,9 +49,11 @@ __all__ = [
     "ChunkHeader",
     "MalformedRecordError",
     "SchemaRecord",
+    "chunk_content_length",
     "message_index_entry_count",
     "parse_channel",
     "parse_chunk_header",
+    "parse_footer",
     "parse_metadata",
     "parse_schema",
     "read_map",
@@ -73,6 +78,9 @@ OP_DATA_END: Final = 0x0F
 PARSED_OPS: Final = frozenset({OP_HEADER, OP_FOOTER, OP_SCHEMA, OP_CHANNEL, OP_MESSAGE,
                                OP_CHUNK, OP_STATISTICS, OP_METADATA, OP_DATA_END})
 
+#: The opcodes the specification defines (Header 0x01 to DataEnd 0x0F).
+KNOWN_OPS: Final = frozenset(range(0x01, 0x10))
+
 #: Record header: opcode u8, content length u64 (bytes).
 RECORD_HEADER: Final = struct.Struct("<BQ")
 RECORD_HEADER_BYTES: Final = RECORD_HEADER.size
@@ -89,6 +97,15 @@ _STATS: Final = struct.Struct("<QHIIIIQQ")
 # MessageIndex: channel id u16, then the byte length u32 of its (log_time u64, offset u64) array.
 _MESSAGE_INDEX_HEAD: Final = 6
 _MESSAGE_INDEX_ENTRY: Final = 16
+# Footer record with its header: opcode u8, length u64 (20), summary start u64, summary offset
+# start u64, summary CRC-32 u32.
+_FOOTER: Final = struct.Struct("<BQQQI")
+#: A Footer record and the closing magic (bytes).
+FOOTER_AND_MAGIC_BYTES: Final = _FOOTER.size + len(MAGIC)
+#: Compression names longer than this are taken for damage when a chunk's length is inferred.
+_MAX_COMPRESSION_NAME: Final = 255
+#: Bytes of a chunk record's content that :func:`chunk_content_length` needs at most.
+CHUNK_HEAD_MAX_BYTES: Final = 32 + _MAX_COMPRESSION_NAME + 8
 _U16: Final = struct.Struct("<H")
 _U32: Final = struct.Struct("<I")
 _U64: Final = struct.Struct("<Q")
@@ -293,3 +310,38 @@ def parse_chunk_header(content: bytes) -> ChunkHeader:
         raise MalformedRecordError(f"records of {rlen} bytes claimed, {n - off} left in the "
                                    "chunk record")
     return ChunkHeader(usize, crc, compression, off, rlen)
+
+
+def chunk_content_length(head: Any) -> int | None:
+    """The content length a chunk record's own fields imply: its header and compressed records.
+
+    ``head`` is the start of the content (at least up to the records length field, at most
+    :data:`CHUNK_HEAD_MAX_BYTES` are used). None when ``head`` is too short for those fields
+    or the compression name is implausibly long. Lets the walk read a chunk whose record
+    length field is damaged (bytes).
+    """
+    n = len(head)
+    if n < _CHUNK_HEAD.size + 8:
+        return None
+    clen = _CHUNK_HEAD.unpack_from(head, 0)[4]
+    off = _CHUNK_HEAD.size + clen
+    if clen > _MAX_COMPRESSION_NAME or off + 8 > n:
+        return None
+    (rlen,) = _U64.unpack_from(head, off)
+    return int(off + 8 + rlen)
+
+
+def parse_footer(tail: Any) -> tuple[int, int, int, bytes] | None:
+    """Summary start, summary offset start, summary CRC and CRC'd footer bytes of a file's end.
+
+    ``tail`` is the last :data:`FOOTER_AND_MAGIC_BYTES` bytes of the file. None when they are
+    not a Footer record (opcode 0x02, length 20) followed by the magic. The fourth item is the
+    part of the Footer the summary CRC covers after the summary section (opcode, length and the
+    two offsets), as the specification defines it [1]_.
+    """
+    if len(tail) != FOOTER_AND_MAGIC_BYTES or bytes(tail[_FOOTER.size :]) != MAGIC:
+        return None
+    op, length, start, offset_start, crc = _FOOTER.unpack_from(tail, 0)
+    if op != OP_FOOTER or length != _FOOTER.size - RECORD_HEADER_BYTES:
+        return None
+    return start, offset_start, crc, bytes(tail[: _FOOTER.size - 4])

@@ -84,6 +84,20 @@ class ByteSource:
         self._win = b""
         self._win_pos = 0
 
+    @property
+    def size(self) -> int | None:
+        """Bytes from position 0 to the end (None when the size is not known)."""
+        return self._size
+
+    def seek(self, pos: int) -> None:
+        """Move to position ``pos`` (back or forth; only where :attr:`can_peek`)."""
+        if not self.can_peek or self._size is None:
+            raise io.UnsupportedOperation("this stream cannot be read at a position")
+        pos = max(0, min(pos, self._size))
+        if self._fd is None:
+            self._f.seek(self._base + pos)
+        self.pos = pos
+
     def remaining(self) -> int | None:
         """Bytes left to the end (None when the size is not known)."""
         return None if self._size is None else self._size - self.pos

@@ -358,6 +358,16 @@ def test_record_length_past_end_of_file(intact, tmp_path):
     c = mcap_layout.chunks(bytes(data))[6]
     struct.pack_into("<Q", data, c["pos"] + 1, len(data))
     rec = read(_write(tmp_path, bytes(data)))
+    # the chunk's own fields give its true length and its CRC vouches for its records: the
+    # chunk and every later one are read, the lie is warned about (issue 12, (b))
+    assert not rec.report.rejected
+    assert any(f"Chunk record at byte {c['pos']} claims {len(data)} bytes" in w
+               for w in rec.report.warnings)
+    assert all(rec.channels[k].equals(ref.channels[k]) for k in ref.channels)
+    # a stream that cannot be read ahead (gzip) still ends there, counted
+    gz = tmp_path / "lie.mcap.gz"
+    gz.write_bytes(gzip.compress(bytes(data)))
+    rec = read(gz)
     assert rec.report.rejected["truncated_record"] == 1
     assert rec.report.first_position["truncated_record"] == f"byte {c['pos']}"
     want = _reference_prefix(bytes(data[: c["pos"]]))
