@@ -45,6 +45,9 @@ reason                     what happened
 ``bad_record``             a record too short for its own fields
 ``oversized_record``       a top-level record longer than :data:`MAX_RECORD_BYTES` (skipped)
 ``truncated_record``       the file ends inside a record, or before its DataEnd record
+``lost_sync``              a record's length field points past the end of the file or off the
+                           record chain; the bytes up to the next plausible record are skipped
+                           (counted once, whatever they held)
 =========================  ===================================================================
 
 The first position of each reason names the chunk and the message record's offset in it.
@@ -56,7 +59,8 @@ kept. AccelBatch payloads that name the same channel on several topics are kept 
 The limits are :data:`MAX_CHUNK_UNCOMPRESSED_BYTES`, :data:`MAX_CHUNK_RATIO` (above
 :data:`FREE_CHUNK_BYTES`), :data:`MAX_RECORD_BYTES` and :data:`MAX_DEFERRED_BYTES`. How the
 messages of a refused chunk are counted, and when a message that comes before its Channel
-record is still read, is told in :mod:`rigtools.ingest.mcap_container`.
+record is still read, and how lying length fields and damaged Schema/Channel records are
+handled, is told in :mod:`rigtools.ingest.mcap_container`.
 """
 
 from __future__ import annotations
@@ -239,6 +243,7 @@ def ingest(
     builder: RecordingBuilder,
     report: IngestReport,
     mapping: ChannelMapping | None,
+    clock: str = "header",
 ) -> dict[str, str]:
     """Read an MCAP stream into a builder.
 
@@ -256,6 +261,10 @@ def ingest(
         When it has MCAP entries (``topic`` and ``field``), only the topics it names are
         read, into the channels it names; otherwise every topic with a known decoder is
         read (see :mod:`rigtools.ingest.mcap_decoders`).
+    clock : {"header", "log_time"}
+        The clock that places channels whose messages have a header stamp; the other is kept
+        as a second clock of the channel (``report.timebase[f"{channel}@{other}"]``). See
+        :func:`rigtools.ingest.read` (``mcap_clock``).
 
     Returns
     -------
@@ -270,12 +279,16 @@ def ingest(
     MappingError
         The mapping names a field none of a topic's messages has, or one that holds no
         number in any of them (messages lacking it among others are counted instead).
+    ValueError
+        ``clock`` is neither ``"header"`` nor ``"log_time"``.
     """
     report.units = "messages"
     scanner = ContainerScanner(stream, path, report)
     by_topic = _specs_by_topic(mapping)
     source = (mapping.source or "<mapping>") if mapping is not None else "<mapping>"
-    ctx = HandlerContext(path, builder, report, source)
+    if clock not in ("header", "log_time"):
+        raise ValueError(f"clock must be 'header' or 'log_time', not {clock!r}")
+    ctx = HandlerContext(path, builder, report, source, clock=clock)
     handlers: dict[int, ChannelHandler] = {}
     for block in scanner.blocks():
         for cid, group in block.by_channel():

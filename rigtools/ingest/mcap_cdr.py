@@ -226,13 +226,18 @@ def _strings_decode(rows: _Rows, strings: Sequence[tuple[int, int]]) -> bool:
 def _field(rows: _Rows, leaf: _Leaf, first: int, count: int, e: str) -> np.ndarray:
     """Elements ``first .. first + count`` of a leaf in every payload, float64 ``(m, count)``."""
     kind, size = _PRIMITIVES[leaf.type]
+    if count == 0:  # an empty array in every payload: no values (the general path's too)
+        return np.empty((rows.m, 0), np.float64)
     raw = rows.span(leaf.offset + first * size, count * size)
     if not raw.flags.c_contiguous:
         raw = np.ascontiguousarray(raw)
     vals = raw.view(np.dtype(e + kind))
     if leaf.type == "bool":
         return (vals != 0).astype(np.float64)
-    return vals.astype(np.float64)
+    # A float32 signalling NaN becomes a quiet NaN of the same payload, as Python's float()
+    # of the general path makes it, silently (NumPy would warn, or raise under seterr).
+    with np.errstate(invalid="ignore"):
+        return vals.astype(np.float64)
 
 
 def _int_field(rows: _Rows, leaf: _Leaf, e: str) -> np.ndarray:
@@ -327,10 +332,15 @@ class _LayoutTooBigError(Exception):
 def _path_parts(path: str) -> tuple[str, ...]:
     """A dotted field path as :func:`~rigtools.ingest.mcap_ros2.get_field` splits it."""
     parts = []
-    for part in re.split(r"\.|\[(\d+)\]", path):
+    for part in re.split(r"\.|\[([0-9]+)\]", path):
         if part:
-            parts.append(str(int(part)) if part.isdigit() else part)
+            parts.append(str(int(part)) if _is_index(part) else part)
     return tuple(parts)
+
+
+def _is_index(part: str) -> bool:
+    """True when a path component is an array index: ASCII digits only (``"²"`` is none)."""
+    return part.isascii() and part.isdigit()
 
 
 class Ros2BlockDecoder:
@@ -439,7 +449,7 @@ class Ros2BlockDecoder:
         -------
         Ros2Columns or None
             None unless every message has the first one's layout (see the module notes) and
-            every path names, in it, a number or a non-empty numeric array (not ``uint8`` or
+            every path names, in it, a number or a numeric array (empty ones too) (not ``uint8`` or
             ``byte``, which the general decoder hands on as ``bytes``); with a header, its
             stamp fields must be integers of at most 32 bits, and a message without one must
             have no top-level ``stamp_ns`` (which the handlers would take for a stamp).
@@ -454,7 +464,7 @@ class Ros2BlockDecoder:
             if found is None:
                 return None
             leaf, first, count = found
-            if count == 0 or (i < len(scalar) and scalar[i] and count != 1):
+            if i < len(scalar) and scalar[i] and count != 1:
                 return None
             out.append(_field(rows, leaf, first, count, e))
         sec = lay.leaves.get(("header", "stamp", "sec"))
@@ -499,7 +509,7 @@ def _resolve(lay: CdrLayout, parts: tuple[str, ...]) -> tuple[_Leaf, int, int] |
         if leaf.type == "string" or (leaf.array and leaf.type in _BYTES_ARRAYS):
             return None
         return leaf, 0, leaf.elems
-    if len(parts) < 2 or not parts[-1].isdigit():
+    if len(parts) < 2 or not _is_index(parts[-1]):
         return None
     leaf = lay.leaves.get(parts[:-1])
     if leaf is None or not leaf.array or leaf.type == "string":

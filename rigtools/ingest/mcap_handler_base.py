@@ -44,12 +44,17 @@ class HandlerContext:
         Receives the tallies and warnings.
     mapping_source : str
         Where the mapping came from, for :class:`~rigtools.errors.MappingError`.
+    clock : str
+        ``"header"`` or ``"log_time"``: the clock that places a channel whose messages have
+        a header stamp; the other is handed to the builder as a second clock
+        (:meth:`~rigtools.ingest.builder.RecordingBuilder.add_other_clock`).
     """
 
     path: str
     builder: RecordingBuilder
     report: IngestReport
     mapping_source: str
+    clock: str = "header"
     _warned: set[tuple[str, object]] = field(default_factory=set)
 
     def warn_once(self, reason: str, key: object, text: str) -> None:

@@ -41,6 +41,13 @@ a chunk at a time when the chunk's messages share one CDR layout
 (:mod:`rigtools.ingest.mcap_cdr`): :class:`ImuHandler`, :class:`ScalarHandler` and
 :class:`MappedHandler` take the block's fields as arrays and fall back to decoding message by
 message, with the same values, for any chunk that breaks the layout.
+
+Two clocks: a ROS 2 message with a header has its header stamp and its MCAP log time. The
+context's ``clock`` (``"header"``, the default, or ``"log_time"``; ``read(mcap_clock=...)``)
+chooses which places an Imu or mapped uniform channel (and times a mapped slow field); the
+other is handed to the builder as the channel's second clock, whose statistics and median
+offset land in ``report.timebase[f"{channel}@{clock}"]``. Topic scalars without a header
+(``std_msgs/msg/Float64``) have the log time only.
 """
 
 from __future__ import annotations

@@ -162,13 +162,14 @@ def get_field(obj: Any, path: str) -> Any:
         A component of the path does not exist; the message names it.
     """
     cur = obj
-    for part in re.split(r"\.|\[(\d+)\]", path):
+    for part in re.split(r"\.|\[([0-9]+)\]", path):  # ASCII digits: int() of "²" fails
         if not part:
             continue
         nxt = _MISSING
         if isinstance(cur, dict):
             nxt = cur.get(part, _MISSING)
-        elif isinstance(cur, list | tuple | bytes | np.ndarray) and part.isdigit():
+        elif isinstance(cur, list | tuple | bytes | np.ndarray) and part.isascii() \
+                and part.isdigit():
             i = int(part)
             nxt = cur[i] if i < len(cur) else _MISSING
         elif not part.startswith("_"):

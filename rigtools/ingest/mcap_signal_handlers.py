@@ -68,28 +68,90 @@ class _Slabs:
         self.n += k
 
     def take(self) -> np.ndarray:
-        """All values as one array (a view of the slab when there is one); empties this."""
+        """All values as one array (a view of the slab when there is one); empties this.
+
+        Several slabs are copied one by one into the result, each released as soon as it is
+        copied: the pages of the result become resident as the slabs' are given back, so
+        joining costs about one slab, not a second copy of the whole array.
+        """
         parts = [*self.full, *([self.cur[: self.used]] if self.cur is not None else [])]
+        n = self.n
         self.full, self.cur, self.used, self.n = [], None, 0, 0
         if not parts:
             return np.empty(0, self.dtype)
-        return parts[0] if len(parts) == 1 else np.concatenate(parts)
+        if len(parts) == 1:
+            return parts[0]
+        out: np.ndarray = np.empty(n, self.dtype)
+        at = 0
+        parts.reverse()
+        while parts:
+            part = parts.pop()
+            out[at : at + part.shape[0]] = part
+            at += part.shape[0]
+            del part
+        return out
 
+
+#: Stamps of a second clock kept at most (evenly spread): enough for its median offset and
+#: spread, small beside a per-sample stream (512 KiB).
+_OTHER_CLOCK_POINTS = 1 << 16
 
 #: Values per slab of :class:`_Slabs` (2 MiB of float64), and the least first slab.
 _SLAB = 1 << 18
 _MIN_SLAB = 1 << 12
 
 
+class _Thinned:
+    """The values of a stream at positions ``0, step, 2 step, ...``, at most ``limit``.
+
+    ``step`` (a power of two) doubles whenever more would be kept, so the values kept are
+    always evenly spread over the whole stream and their positions need no storing: a
+    second clock needs no more stamps than that for its statistics and median offset.
+    """
+
+    def __init__(self, limit: int) -> None:
+        self.limit = limit
+        self.step = 1
+        self.n = 0
+        self.kept = 0
+        self.val: list[np.ndarray] = []
+
+    def append(self, x: np.ndarray) -> None:
+        """Take the values of ``x`` (1-D, any strides) whose position is a multiple of step."""
+        k = int(x.shape[0])
+        first = (-self.n) % self.step
+        if first < k:
+            part = np.array(x[first :: self.step])
+            self.val.append(part)
+            self.kept += int(part.shape[0])
+        self.n += k
+        while self.kept > self.limit:
+            self.step *= 2
+            v = np.concatenate(self.val)[::2].copy()  # positions 0, 2 step', 4 step', ...
+            self.val = [v]
+            self.kept = int(v.shape[0])
+
+    def take(self) -> tuple[np.ndarray, np.ndarray]:
+        """Positions (int64) and values kept; empties this."""
+        val = np.concatenate(self.val) if self.val else np.empty(0)
+        pos = np.arange(val.shape[0], dtype=np.int64) * self.step
+        self.val, self.kept, self.n, self.step = [], 0, 0, 1
+        return pos, val
+
+
 class ImuHandler(DecodingHandler):
     """sensor_msgs/msg/Imu: three channels ``<topic>/linear_acceleration.x|y|z`` (m/s^2).
 
-    The header stamps (the MCAP log times when every header stamp is zero) give the rate
-    and each sample's index: :func:`~rigtools.ingest.mcap_timing.stamp_grid` fits a grid
+    The header stamps (the MCAP log times when every header stamp is zero, or when the
+    context's ``clock`` is ``"log_time"``) give the rate and each sample's index:
+    :func:`~rigtools.ingest.mcap_timing.stamp_grid` fits a grid
     to them, tolerant of stamp jitter (the message order when no message is missing, a
     fitted grid otherwise), and the rate is the fitted one, snapped to a value of 3
     significant digits only when within 0.1 %. Gaps and duplicates the grid shows are
-    recorded by the builder, never filled.
+    recorded by the builder, never filled. The other clock (the log times; the header stamps
+    with ``clock="log_time"`` unless all zero) is handed to the builder as a second clock of
+    each axis (:meth:`~rigtools.ingest.builder.RecordingBuilder.add_other_clock`), thinned
+    to at most :data:`_OTHER_CLOCK_POINTS` stamps evenly spread (every ``2^k``-th message).
 
     A chunk whose Imu messages all have one layout (same length, encapsulation header and
     ``frame_id`` length) is read at once (:func:`~rigtools.ingest.mcap_cdr.decode_imu_cdr_many`);
@@ -99,11 +161,15 @@ class ImuHandler(DecodingHandler):
     def __init__(self, ctx: HandlerContext, channel: ChannelRecord, decoder: Decoder) -> None:
         super().__init__(ctx, channel, decoder)
         self.decode_many = decoder.decode_many
-        self.stamps = _Slabs(np.int64)  # header stamps (ns)
+        self.by_log = ctx.clock == "log_time"
+        # the stamps (ns) of the clock that places the channel, and the other one, thinned
+        self.stamps = _Slabs(np.int64)
+        self.other = _Thinned(_OTHER_CLOCK_POINTS)
+        self.any_header = False  # some header stamp is not zero
         self.axes = (_Slabs(np.float64), _Slabs(np.float64), _Slabs(np.float64))  # x, y, z
-        # uint64 log times (ns), per block: kept only while every header stamp is zero (the
-        # only case they are used in)
-        self.log_times: list[np.ndarray] | None = []
+        # log times (ns, int64), per block: kept only while every header stamp is zero and
+        # the header clock places the channel (then they place it instead)
+        self.log_times: list[np.ndarray] | None = None if self.by_log else []
 
     def add(self, block: MessageBlock) -> None:
         """Collect header stamps, log times and accelerations (a chunk at once if it can)."""
@@ -125,14 +191,18 @@ class ImuHandler(DecodingHandler):
                        np.asarray(logs, np.uint64))
 
     def _keep(self, stamps: np.ndarray, accel: np.ndarray, log_times: np.ndarray) -> None:
-        self.stamps.append(stamps)
+        logs = log_times.astype(np.int64)  # a contiguous copy: the chunk is not pinned
+        nonzero = bool(np.any(stamps))
+        self.any_header |= nonzero
+        self.stamps.append(logs if self.by_log else stamps)
+        self.other.append(stamps if self.by_log else logs)
         for k, axis in enumerate(self.axes):
             axis.append(accel[:, k])
         if self.log_times is not None:
-            if np.any(stamps):
+            if nonzero:
                 self.log_times = None
             else:
-                self.log_times.append(log_times)
+                self.log_times.append(logs)
         self.ctx.report.decoded += int(stamps.shape[0])
 
     def finish(self) -> None:
@@ -142,11 +212,16 @@ class ImuHandler(DecodingHandler):
         topic = self.channel.topic
         stamps_ns = self.stamps.take()
         n = int(stamps_ns.shape[0])
+        other_pos, other_ns = self.other.take()
+        other_clock = "header" if self.by_log else "log_time"
+        if self.by_log and not self.any_header:  # header stamps all zero: no second clock
+            other_pos, other_ns = other_pos[:0], other_ns[:0]
         if self.log_times is not None:  # every header stamp is zero
             self.ctx.report.warn(f"topic {topic!r}: Imu header stamps are all zero; the "
                                  "MCAP log times are used instead")
-            stamps_ns = np.concatenate(self.log_times).astype(np.int64)
+            stamps_ns = np.concatenate(self.log_times)
             self.log_times = None
+            other_pos, other_ns = other_pos[:0], other_ns[:0]
         grid = stamp_grid(stamps_ns)
         if grid is None:
             self.ctx.report.reject("no_sample_rate", n, f"topic {topic!r}")
@@ -166,6 +241,10 @@ class ImuHandler(DecodingHandler):
             self.ctx.report.warn(f"topic {topic!r}: {grid.n_moved} Imu sample(s) jittered into "
                                  "the slot of another and were moved to the free slot beside")
         index = grid.index
+        other_index = other_pos if grid.method == "order" else index[other_pos]
+        other_s = other_ns.astype(np.float64)
+        other_s *= 1e-9
+        del other_pos, other_ns
         if n > MAX_CLOCK_POINTS:
             # the builder checks the clock on MAX_CLOCK_POINTS stamps picked evenly: picked
             # here the same way, the rest need not be kept (the result is the same)
@@ -181,8 +260,10 @@ class ImuHandler(DecodingHandler):
         del index, grid
         for axis, parts in zip("xyz", self.axes, strict=True):
             values = parts.take()
-            self.ctx.builder.add_samples(f"{topic}/linear_acceleration.{axis}", "m/s^2", rate,
-                                         start, values, stamp_index=stamp_index, stamps_s=t)
+            name = f"{topic}/linear_acceleration.{axis}"
+            self.ctx.builder.add_samples(name, "m/s^2", rate, start, values,
+                                         stamp_index=stamp_index, stamps_s=t)
+            self.ctx.builder.add_other_clock(name, other_clock, other_index, other_s)
 
 
 class SlowValueHandler(DecodingHandler):
@@ -254,7 +335,8 @@ class ScalarHandler(DecodingHandler):
             values: np.ndarray | None = self.decode_many(block.buf, block.start, block.end)
             if values is not None:
                 self.v.append(values)
-                self.t.append(block.log_time)
+                # a copy: a strided view (channels taking turns) would pin the chunk's column
+                self.t.append(np.array(block.log_time, np.uint64))
                 self.ctx.report.decoded += int(values.shape[0])
                 return
         t: list[int] = []
@@ -330,14 +412,37 @@ class MappedHandler(DecodingHandler):
         self.decode_many = decoder.decode_many
         self.paths = [spec.field or "" for spec in specs]
         self.scalar = [isinstance(spec, SlowSpec) for spec in specs]
-        self.stamps: list[np.ndarray] = []  # float64 (ns), per block
+        self.by_log = ctx.clock == "log_time"
+        self.stamps: list[np.ndarray] = []  # float64 (ns), per block: the placing clock
+        self.others: list[np.ndarray] = []  # float64 (ns), per block: the other (NaN: none)
         self.cols: list[list[np.ndarray]] = [[] for _ in specs]  # flat float64, per block
         self.counts: list[list[np.ndarray]] = [[] for _ in specs]  # values per message
         self.tally = [_FieldTally() for _ in specs]
         self.n_payloads = 0
 
+    def _stamp(self, logs: np.ndarray, header: np.ndarray | None) -> None:
+        """Keep a block's stamps (ns, float64; ``header`` NaN where a message has none)."""
+        if header is None:
+            self.stamps.append(logs)
+            self.others.append(np.full(logs.shape[0], np.nan))
+            return
+        if self.by_log:
+            self.stamps.append(logs)
+            self.others.append(header)
+            return
+        none = np.isnan(header)
+        if none.any():  # no header stamp: the log time places the message
+            header = np.where(none, logs, header)
+            logs = np.where(none, np.nan, logs)
+        self.stamps.append(header)
+        self.others.append(logs)
+
     def add(self, block: MessageBlock) -> None:
-        """Collect each mapped field and the message's stamp (header stamp, else log time).
+        """Collect each mapped field and the message's stamps (header stamp and log time).
+
+        The context's ``clock`` decides which places the message: ``"header"``, the header
+        stamp (the log time for a message without one), ``"log_time"``, the log time; the
+        other is kept as the channel's second clock.
 
         A chunk of ROS 2 messages of one layout is read at once
         (:meth:`~rigtools.ingest.mcap_cdr.Ros2BlockDecoder.columns`), with the same values.
@@ -352,14 +457,15 @@ class MappedHandler(DecodingHandler):
                 for tally in self.tally:
                     tally.found += m
                     tally.usable += m
-                when = block.log_time if cols.stamp_ns is None else cols.stamp_ns
-                self.stamps.append(when.astype(np.float64))
+                header = None if cols.stamp_ns is None else cols.stamp_ns.astype(np.float64)
+                self._stamp(block.log_time.astype(np.float64), header)
                 for col, counts, vals in zip(self.cols, self.counts, cols.values, strict=True):
                     col.append(vals.reshape(-1))
                     counts.append(np.full(m, vals.shape[1], np.int64))
                 self.ctx.report.decoded += m
                 return
-        stamps: list[int] = []
+        stamps: list[float] = []  # header stamps (NaN: none)
+        logs: list[int] = []
         rows: list[list[np.ndarray]] = [[] for _ in self.specs]
         for i, m_, obj in self._decoded(block):
             self.n_payloads += 1
@@ -389,13 +495,16 @@ class MappedHandler(DecodingHandler):
                                    f"counted as {reason}")
                 continue
             stamp = message_stamp_ns(obj)
-            stamps.append(m_[2] if stamp is None else stamp)
+            stamps.append(np.nan if stamp is None else stamp)
+            logs.append(m_[2])
             for col, val in zip(rows, row, strict=True):
                 col.append(val)
             self.ctx.report.decoded += 1
         if not stamps:
             return
-        self.stamps.append(np.asarray(stamps, np.float64))
+        header = np.asarray(stamps, np.float64)
+        self._stamp(np.asarray(logs, np.uint64).astype(np.float64),
+                    None if np.isnan(header).all() else header)
         for col, counts, arrays in zip(self.cols, self.counts, rows, strict=True):
             col.append(np.concatenate(arrays))
             counts.append(np.asarray([a.size for a in arrays], np.int64))
@@ -422,6 +531,8 @@ class MappedHandler(DecodingHandler):
         if not self.stamps:
             return
         t = np.concatenate(self.stamps) * 1e-9
+        t_other = np.concatenate(self.others) * 1e-9
+        other_clock = "header" if self.by_log else "log_time"
         for spec, arrays, counts_parts in zip(self.specs, self.cols, self.counts, strict=True):
             unit = spec.unit if spec.unit is not None else self.channel.metadata.get("unit", "")
             with np.errstate(over="ignore", invalid="ignore"):  # Inf kept, counted later
@@ -439,6 +550,8 @@ class MappedHandler(DecodingHandler):
             keep = counts > 0
             self.ctx.builder.add_samples(spec.channel, unit, rate, index, values,
                                          stamp_index=idx0[keep], stamps_s=t[keep])
+            self.ctx.builder.add_other_clock(spec.channel, other_clock, idx0[keep],
+                                             t_other[keep])
 
 
 def _short(value: Any, limit: int = 40) -> str:

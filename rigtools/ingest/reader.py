@@ -54,6 +54,7 @@ def read(
     metadata: RunMetadata | None = None,
     fmt: str | None = None,
     strict_dbc: bool = True,
+    mcap_clock: str = "header",
 ) -> Recording:
     """Read a recording file into a :class:`~rigtools.ingest.recording.Recording`.
 
@@ -75,6 +76,15 @@ def read(
         Force a format by name instead of detecting it.
     strict_dbc : bool
         Refuse DBCs with overlapping or oversized signals (cantools ``strict``).
+    mcap_clock : {"header", "log_time"}
+        MCAP only: the clock that places a channel whose messages carry a header stamp
+        (Imu channels, mapped fields). ``"header"`` (default): the header stamp (the log time
+        where a message has none, or where every Imu header stamp is zero); ``"log_time"``:
+        the MCAP log time. The other clock is kept in the report as a second clock of the
+        channel: ``recording.report.timebase[f"{channel}@log_time"]`` (or ``@header``) holds
+        its statistics, its ``start_time_s`` and ``offset_s``, its median offset from the
+        clock that placed the channel (s). Slow signals (topic scalars, log time only) are
+        unaffected except mapped slow fields, timed by the chosen clock.
 
     Returns
     -------
@@ -90,9 +100,13 @@ def read(
         Neither content nor suffix names a supported format.
     DbcError, MappingError
         The DBC or the mapping does not load or does not match the file.
+    ValueError
+        ``mcap_clock`` is neither ``"header"`` nor ``"log_time"``.
     NoDataError
         The file reads but holds no decodable channel or slow signal.
     """
+    if mcap_clock not in ("header", "log_time"):
+        raise ValueError(f"mcap_clock must be 'header' or 'log_time', not {mcap_clock!r}")
     p = Path(path)
     kind = detect_format(p, fmt)
     module = reader_module(kind)
@@ -103,7 +117,8 @@ def read(
     # beside the building of the channels instead.
     hasher = ThreadPoolExecutor(max_workers=1, thread_name_prefix="rigtools-sha256")
     try:
-        return _read_with(p, kind, module, dbc, mapping, metadata, strict_dbc, hasher)
+        return _read_with(p, kind, module, dbc, mapping, metadata, strict_dbc, hasher,
+                          mcap_clock)
     finally:
         hasher.shutdown(wait=False)  # after a refusal, let the hash finish on its own
 
@@ -117,6 +132,7 @@ def _read_with(
     metadata: RunMetadata | None,
     strict_dbc: bool,
     hasher: ThreadPoolExecutor,
+    mcap_clock: str = "header",
 ) -> Recording:
     hashing = None if kind == "mcap" else hasher.submit(sha256_of, p)
     if isinstance(mapping, str | Path):
@@ -134,7 +150,7 @@ def _read_with(
             layout_desc["dbc_sha256"] = dbc_digest(dbc_file)
             assemble_can(module.iter_batches(stream, str(p), report), layout, builder, report)
         else:
-            extra = module.ingest(stream, str(p), builder, report, mapping)
+            extra = module.ingest(stream, str(p), builder, report, mapping, clock=mcap_clock)
             layout_desc = {"source": "mapping" if mapping else "mcap-schemas"}
             if mapping is not None:
                 layout_desc["mapping"] = mapping.to_dict()

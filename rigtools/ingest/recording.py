@@ -173,7 +173,10 @@ class IngestReport:
     warnings : list of str
         Everything else worth telling the user (timestamps backwards, clock drift, ...).
     timebase : dict
-        Per channel, how the logger timestamps compare with the counter time base.
+        Per channel, how the logger timestamps compare with the counter time base. A
+        channel with a second clock (an MCAP message's log time beside its header stamp)
+        also has an entry ``"<channel>@<clock>"`` with the same statistics, ``start_time_s``
+        on that clock and ``offset_s``, its median offset from the channel's clock (s).
     """
 
     units: str = "frames"

@@ -25,8 +25,11 @@ message by message: records of two lengths alternating, which the chunk walk rea
 repeating pattern) is read against mcap's bare iteration too.
 
 Times of the fast contenders are the best of :data:`REPEATS`, taken in alternating rounds (the
-machine may be shared); the slow ones (mcap's iteration, the general paths) run once. Nothing
-is asserted but that the file reads completely.
+machine may be shared); the slow ones (mcap's iteration, the general paths) run once. Each
+target of the issue is printed as "met" or "NOT met"; no wall-clock figure is asserted (the
+machine is shared), but the peak-memory ratio, which does not depend on the machine's load,
+is: at most :data:`MEMORY_TARGET` times the decoded arrays, for the library call and the
+command line's set-up alike.
 
 Run it as a script (``python tests/benchmarks/bench_mcap_imu.py``) or with pytest
 (``pytest tests/benchmarks/bench_mcap_imu.py -m benchmark -s``); the default run skips it.
@@ -56,6 +59,14 @@ T0_NS = 1_700_000_000_000_000_000
 SLOW_TOPICS = ("/rig/temperature", "/rig/speed", "/rig/torque")
 SLOW_RATE_HZ = 10.0
 REPEATS = 3
+#: Targets of issue 11: read at least this many times faster than mcap's bare iteration, and
+#: peak resident memory above the baseline at most this many times the decoded arrays.
+SPEED_TARGET = 10.0
+MEMORY_TARGET = 2.0
+
+
+def _met(ok: bool) -> str:
+    return "met" if ok else "NOT met"
 
 
 def write_recording(path: Path, seconds: float = DURATION_S) -> Path:
@@ -220,6 +231,8 @@ def report(m: dict[str, float]) -> str:
         return f"  {label:<30} {s:9.3f} s  {n / s / 1e6:7.2f} M messages/s"
 
     dec_mb = m["decoded_bytes"] / 1e6
+    speed = m["mcap_bare_s"] / m["read_s"]
+    mem = max(m["peak_library_bytes"], m["peak_cli_bytes"]) / m["decoded_bytes"]
     return "\n".join(
         [
             f"Imu stream: {m['file_bytes'] / 1e6:.1f} MB file, {mb:.1f} MB uncompressed in "
@@ -230,8 +243,8 @@ def report(m: dict[str, float]) -> str:
             line("rigtools general path", m["general_s"]),
             line("mcap + mcap_ros2 decoding", m["mcap_ros2_s"]),
             line("decompress only (ceiling)", m["decompress_s"]),
-            f"  ratio mcap bare / read          {m['mcap_bare_s'] / m['read_s']:8.1f}   "
-            "(target >= 10)",
+            f"  ratio mcap bare / read          {speed:8.1f}   "
+            f"(target >= {SPEED_TARGET:g}: {_met(speed >= SPEED_TARGET)})",
             f"  ratio mcap bare / ingest        {m['mcap_bare_s'] / m['ingest_s']:8.1f}",
             f"  ratio rigtools general / read   {m['general_s'] / m['read_s']:8.1f}",
             f"  ratio mcap_ros2 / read          {m['mcap_ros2_s'] / m['read_s']:8.1f}",
@@ -239,7 +252,8 @@ def report(m: dict[str, float]) -> str:
             f"  peak RSS above baseline: library {m['peak_library_bytes'] / 1e6:.1f} MB, "
             f"cli {m['peak_cli_bytes'] / 1e6:.1f} MB; decoded arrays {dec_mb:.1f} MB "
             f"(ratio {m['peak_library_bytes'] / m['decoded_bytes']:.2f} / "
-            f"{m['peak_cli_bytes'] / m['decoded_bytes']:.2f}; target <= 2)",
+            f"{m['peak_cli_bytes'] / m['decoded_bytes']:.2f}; target <= {MEMORY_TARGET:g}: "
+            f"{_met(mem <= MEMORY_TARGET)})",
         ]
     )
 
@@ -311,7 +325,11 @@ def run(directory: Path) -> dict[str, float]:
 
 
 def test_bench_mcap_imu(tmp_path):
-    run(tmp_path)
+    m = run(tmp_path)
+    # not a wall-clock figure: the high-water resident set against the decoded arrays
+    for mode in ("library", "cli"):
+        ratio = m[f"peak_{mode}_bytes"] / m["decoded_bytes"]
+        assert ratio <= MEMORY_TARGET, f"peak memory ({mode}) {ratio:.2f} x the decoded arrays"
 
 
 if __name__ == "__main__":
