@@ -122,7 +122,8 @@ def test_round_trip_is_exact_with_a_mapping_too(tmp_path, blf_file):
     assert main(["ingest", str(path), "--map", str(m), "-o", str(out)]) == 0
     direct = read(path, mapping=m)
     assert read(out).equals(direct)
-    assert set(direct.channels) == {"pinion_radial"} and direct.channels["pinion_radial"].unit == "g"
+    assert set(direct.channels) == {"pinion_radial"}
+    assert direct.channels["pinion_radial"].unit == "g"
     np.testing.assert_allclose(direct.channels["pinion_radial"].values, chans[0] / 9.80665,
                                rtol=1e-15)
     assert direct.metadata.run_id == "mapped"

@@ -69,7 +69,8 @@ def test_reference_dbc_carries_the_layout_attributes():
 def test_dbc_that_does_not_parse_names_file_and_line(tmp_path):
     bad = tmp_path / "broken.dbc"
     bad.write_text('VERSION ""\nBO_ 100 M: 8 X\n SG_ S : 0|16@1+ (1,0) [0|1 "" X\n')
-    with pytest.raises(DbcError, match=r"broken\.dbc at line 3 column 29: expected a valid DBC file"):
+    expected = r"broken\.dbc at line 3 column 29: expected a valid DBC file"
+    with pytest.raises(DbcError, match=expected):
         load_dbc(bad)
 
 

@@ -116,7 +116,10 @@ def test_reference_layout_from_dbc_attributes_counts_every_frame():
     [
         ("[[uniform]]\nchannel='a'\nmessage='M'\nsamples=['x']\nsample_rate_Hz=10\ncolour='red'\n",
          r"map\.toml at line 6: .*'colour' was unexpected"),
-        ("[[uniform]]\nchannel='a'\nmessage='M'\nsamples=['x']\n", r"'sample_rate_Hz' is a required"),
+        (
+            "[[uniform]]\nchannel='a'\nmessage='M'\nsamples=['x']\n",
+            r"'sample_rate_Hz' is a required",
+        ),
         ("[[slow]]\nname='s'\nmessage='M'\n", r"map\.toml.*expected keys and values allowed"),
         ("[[uniform]\n", r"map\.toml: expected a TOML mapping file"),
     ],
