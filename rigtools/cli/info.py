@@ -132,7 +132,9 @@ def format_info(rec: Recording) -> str:
             drift = st.get("drift_ppm")
             lines.append(f"clock     {name}: jitter {st.get('jitter_s', 0) * 1e6:.1f} us, "
                          f"max residual {st.get('max_abs_residual_s', 0) * 1e6:.1f} us"
-                         + (f", drift {drift:.1f} ppm" if drift is not None else ""))
+                         + (f", drift {drift:.1f} ppm" if drift is not None else "")
+                         + (f", offset {st['offset_s'] * 1e6:+.1f} us from the channel's clock"
+                            if "offset_s" in st else ""))
     return "\n".join(lines)
 
 

@@ -439,3 +439,14 @@ def test_empty_arrays_read_at_once_on_both_paths(monkeypatch, tmp_path):
     # only the chunk holding both kinds falls back (counted twice: ingest and read)
     assert spy.declined <= 2 and spy.taken > 10
     assert len(chans["v"]) == 800 and rep["decoded"] == 400
+
+
+def test_info_shows_the_second_clock_offset(delayed, capsys):
+    from rigtools.cli import main
+
+    assert main(["info", str(delayed)]) == 0
+    out = capsys.readouterr().out
+    line = next(ln for ln in out.splitlines() if f"{X}@log_time" in ln)
+    # 5 us written; float64 seconds near 1.7e9 s resolve 0.24 us
+    offset_us = float(line.split("offset ")[1].split(" us from the channel's clock")[0])
+    assert abs(offset_us - 5.0) < 0.5
