@@ -52,11 +52,14 @@ __all__ = [
     "MCAP_FIRST_INDEX",
     "OracleResult",
     "build_corpus",
+    "can_frames",
     "can_row_samples",
     "check_against_truth",
     "intact_files",
     "main",
+    "mcap_required",
     "required_samples",
+    "touched_records",
 ]
 
 #: Frame counter of the first frame of every CAN channel (wraps after 536 frames).
@@ -91,6 +94,16 @@ def _mcap_truth() -> dict[str, np.ndarray]:
     return {f"accel_{i}": rng.standard_normal(_N_MCAP).astype(np.float32) for i in (1, 2)}
 
 
+def can_frames() -> Any:
+    """The frames every intact CAN file of the corpus holds (a ``CanFrameBatch``, in order)."""
+    from rigtools.demo.can_writer import encode_reference_frames
+
+    slow = {"Torque_Nm": 302.0, "PinionSpeed_rpm": _SPEED, "OilTemp_C": 90.5}
+    return encode_reference_frames(
+        _can_truth(), slow, start_time_s=_START, first_counter=CAN_FIRST_COUNTER, rng=5
+    )
+
+
 def _blf_small_containers(path: Path, frames: object) -> Path:
     """python-can's BLFWriter with 4 KiB containers, so one file holds several of them."""
     import can
@@ -122,20 +135,12 @@ def intact_files(out: Path) -> tuple[list[tuple[Path, str]], dict[str, np.ndarra
     ``can:PinionSpeed_rpm`` etc. to the slow values, and ``mcap:<channel>`` to the float32
     samples widened to float64; ``first_index`` entries give the absolute index of sample 0.
     """
-    from rigtools.demo.can_writer import (
-        blf_bytes,
-        encode_reference_frames,
-        quantise_reference,
-        write_can_log,
-    )
+    from rigtools.demo.can_writer import blf_bytes, quantise_reference, write_can_log
     from rigtools.demo.mcap_writer import write_accel_mcap
 
     out.mkdir(parents=True, exist_ok=True)
     chans = _can_truth()
-    slow = {"Torque_Nm": 302.0, "PinionSpeed_rpm": _SPEED, "OilTemp_C": 90.5}
-    frames = encode_reference_frames(
-        chans, slow, start_time_s=_START, first_counter=CAN_FIRST_COUNTER, rng=5
-    )
+    frames = can_frames()
     files: list[tuple[Path, str]] = []
     for fmt in ("blf", "asc", "trc", "log", "csv"):
         files.append((write_can_log(out / f"can_{fmt}.{fmt}", frames, fmt), "can"))
@@ -216,6 +221,7 @@ def check_against_truth(
     tolerance_slow: int = 0,
     required: Mapping[str, np.ndarray] | None = None,
     index_modulus: int | None = None,
+    tolerance_lost: int | None = None,
 ) -> OracleResult:
     """The oracle: a reader's Recording against the samples the writer was given.
 
@@ -231,9 +237,11 @@ def check_against_truth(
 
     * every sample flagged in ``required`` (base channel name -> mask over the written
       samples: the samples of the records no damage touched) is returned, valid and equal,
-      except at most ``tolerance_samples`` of them: a damaged record may take the place of
-      one intact record (a flipped identifier or counter bit makes it a well-formed twin of
-      another frame, and which of two differing twins is the true one cannot be known).
+      except at most ``tolerance_lost`` of them (default: ``tolerance_samples``): a damaged
+      record may take the place of one intact record (a flipped identifier or counter bit
+      makes it a well-formed twin of another frame, and which of two differing twins is the
+      true one cannot be known). Cuts, dropped, duplicated and shuffled records make no
+      twins: pass 0 there.
 
     Channel names may carry a ``@busN`` suffix (a damaged bus field puts frames on another
     bus); they are compared under their base name. ``index_modulus`` compares absolute
@@ -284,8 +292,9 @@ def check_against_truth(
     for base, mask in (required or {}).items():
         have = got.get(base, np.zeros(mask.size, bool))
         n_lost += int((mask & ~have).sum())
-    assert n_lost <= tolerance_samples, (
-        f"{n_lost} sample(s) of undamaged records missing (tolerated: {tolerance_samples})"
+    lost_ok = tolerance_samples if tolerance_lost is None else tolerance_lost
+    assert n_lost <= lost_ok, (
+        f"{n_lost} sample(s) of undamaged records missing (tolerated: {lost_ok})"
     )
     if intact is not None:
         bad_slow = 0
@@ -508,6 +517,206 @@ def _text_damages(data: bytes) -> dict[str, Damage]:
     }
 
 
+# --- what each damage touches ------------------------------------------------------------------
+#
+# Every damaged file records which records of the intact file the damage touched: frame rows
+# (CAN: the i-th frame the writer was given) or (channel, sequence) of MCAP batch messages.
+# Every other record must come back whole (``required`` of the oracle); a reader that drops
+# intact data next to the damage fails. A damage is a set of byte ranges of the intact file;
+# a record is touched when a range overlaps the unit holding it (a text line, a BLF container
+# -- a frame object may straddle two --, an MCAP chunk or top-level message record, or the
+# record defining its MCAP channel).
+
+_TEXT_FRAME_LINE = {
+    ".asc": re.compile(rb"^\s*\d+\.\d+\s+\d+\s+[0-9A-Fa-f]+x?\s+(Rx|Tx)"),
+    ".trc": re.compile(rb"^\s*\d+\s+\d"),
+    ".log": re.compile(rb"^\("),
+    ".csv": re.compile(rb"^\d"),
+}
+
+Unit = tuple[int, int, list[Any]]  # byte range [start, end) of the intact file, its records
+
+
+def _text_units(path: Path, data: bytes) -> list[Unit]:
+    units, pos, row = [], 0, 0
+    for ln in _lines(data):
+        rows: list[Any] = []
+        if _TEXT_FRAME_LINE[path.suffix].match(ln):
+            rows, row = [row], row + 1
+        units.append((pos, pos + len(ln), rows))
+        pos += len(ln)
+    return units
+
+
+def _blf_units(data: bytes) -> list[Unit]:
+    conts = _blf_objects(data)
+    stream, bounds = b"", [0]
+    for pos, size in conts:
+        method = struct.unpack_from("<H", data, pos + 16)[0]
+        payload = data[pos + 32 : pos + size]
+        stream += zlib.decompress(payload) if method == 2 else payload
+        bounds.append(len(stream))
+    rows: list[list[Any]] = [[] for _ in conts]
+    pos, row = 0, 0
+    while pos + 16 <= len(stream):
+        size = _BLF_OBJ.unpack_from(stream, pos)[3]
+        a = int(np.searchsorted(bounds, pos, side="right")) - 1
+        b = int(np.searchsorted(bounds, pos + size - 1, side="right")) - 1
+        for c in range(a, b + 1):
+            rows[c].append(row)
+        row += 1
+        pos += size + size % 4
+    return [(pos, pos + size + size % 4, r) for (pos, size), r in zip(conts, rows, strict=True)]
+
+
+def _mcap_inner(content: bytes) -> list[tuple[int, bytes]]:
+    out, pos = [], 0
+    while pos + 9 <= len(content):
+        op, length = _HDR.unpack_from(content, pos)
+        out.append((op, content[pos + 9 : pos + 9 + length]))
+        pos += 9 + length
+    return out
+
+
+def _mcap_units(data: bytes) -> list[Unit]:
+    """Units of an MCAP file (top-level records; a chunk with its inner records).
+
+    Records are ``("msg", channel id, sequence)`` and ``("chan", id, topic)`` (a channel
+    definition: every message of the channel depends on it).
+    """
+    import lz4.frame
+    import zstandard
+
+    units = []
+    for op, pos, length in _mcap_records(data):
+        body = data[pos + 9 : pos + 9 + length]
+        inner = [(op, body)]
+        if op == 0x06:
+            clen = struct.unpack_from("<I", body, 28)[0]
+            comp = body[32 : 32 + clen].decode()
+            rlen = struct.unpack_from("<Q", body, 32 + clen)[0]
+            raw = body[40 + clen : 40 + clen + rlen]
+            usize = struct.unpack_from("<Q", body, 16)[0]
+            if comp == "zstd":
+                raw = zstandard.ZstdDecompressor().decompress(raw, max_output_size=usize)
+            elif comp == "lz4":
+                raw = lz4.frame.decompress(raw)
+            inner = _mcap_inner(raw)
+        recs: list[Any] = []
+        for iop, content in inner:
+            if iop == 0x05:
+                cid, seq = struct.unpack_from("<HI", content, 0)
+                recs.append(("msg", cid, seq))
+            elif iop == 0x04:
+                cid = struct.unpack_from("<H", content, 0)[0]
+                tlen = struct.unpack_from("<I", content, 4)[0]
+                recs.append(("chan", cid, content[8 : 8 + tlen].decode()))
+        units.append((pos, pos + 9 + length, recs))
+    return units
+
+
+def _gunzip_prefix(g: bytes) -> int:
+    """Bytes of the original a truncated gzip stream still gives."""
+    d = zlib.decompressobj(31)
+    try:
+        return len(d.decompress(g))
+    except zlib.error:
+        return 0
+
+
+def _damage_ranges(path: Path, data: bytes, name: str) -> list[tuple[int, int]] | None:
+    """Byte ranges of the intact file that damage ``name`` touches; None: nothing is left."""
+    n = len(data)
+    if name.startswith("cut_at_"):
+        return [(int(name[7:]), n)]
+    if name == "gzip_cut":
+        g = gzip.compress(data, mtime=0)
+        return [(_gunzip_prefix(g[: len(g) * 2 // 3]), n)]
+    if name in ("zero_length", "utf16"):
+        return None
+    if name == "wrong_magic":
+        return [(0, 8)]
+    if name.startswith("header_size"):
+        return [(0, 144)]
+    if path.suffix == ".blf" and name.startswith("container_"):
+        objs = _blf_objects(data)
+        pos, size = objs[len(objs) // 2]
+        return [(pos, pos + size)]
+    if name.startswith("chunk_"):
+        c = _mcap_chunks(data)[len(_mcap_chunks(data)) // 2]
+        return [(c["pos"], c["pos"] + 1)]
+    if name.startswith("record_"):
+        mid = [r for r in _mcap_records(data) if r[0] in (0x05, 0x06)]
+        pos = mid[len(mid) // 3][1]
+        return [(pos, pos + 9)]
+    if name == "footer_summary_start_wrong":
+        pos = next(r[1] for r in _mcap_records(data) if r[0] == 0x02)
+        return [(pos, pos + 17)]
+    if name == "tail_magic_missing":
+        return [(n - 8, n)]
+    spans = np.cumsum([0] + [len(ln) for ln in _lines(data)])
+    mid = (len(spans) - 1) // 2
+    return {
+        "nul_bytes": [(n // 2 - 1, n // 2 + 1)],
+        "lines_dropped": [(int(spans[mid]), int(spans[min(mid + 20, len(spans) - 1)]))],
+        "header_lost": [(0, int(spans[min(6, len(spans) - 1)]))],
+        "line_cut_in_middle": [(int(spans[mid]), int(spans[mid + 1]))],
+    }.get(name, [])  # insertions, re-encodings, reorderings: nothing of the intact file lost
+
+
+def touched_records(path: Path, data: bytes, name: str) -> list[Any] | None:
+    """Records of the intact file at ``path`` that damage ``name`` touched (see above).
+
+    CAN: frame rows (ints); MCAP: ``[topic, sequence]`` of batch messages. None: no record
+    is required (nothing of the file is left, or the whole file was re-encoded).
+    """
+    ranges = _damage_ranges(path, data, name)
+    if ranges is None:
+        return None
+    if path.suffix == ".mcap":
+        units = _mcap_units(data)
+    elif path.suffix == ".blf":
+        units = _blf_units(data)
+    else:
+        units = _text_units(data=data, path=path)
+    hit = [any(a < e and s < b for a, b in ranges) for s, e, _ in units]
+    touched = {r for h, (_s, _e, recs) in zip(hit, units, strict=True) if h for r in recs}
+    if path.suffix != ".mcap":
+        return sorted(touched)
+    topic = {r[1]: r[2] for _s, _e, recs in units for r in recs if r[0] == "chan"}
+    # A channel is lost only when every definition of it is touched (the summary repeats it).
+    defined = {r[1] for _s, _e, recs in units for r in recs if r[0] == "chan"}
+    lost_chan = defined - {
+        r[1]
+        for h, (_s, _e, recs) in zip(hit, units, strict=True)
+        if not h
+        for r in recs
+        if r[0] == "chan"
+    }
+    out = set()
+    for _s, _e, recs in units:
+        for r in recs:
+            if r[0] == "msg" and (r in touched or r[1] in lost_chan):
+                out.add((topic.get(r[1], ""), r[2]))
+    return sorted([t, s] for t, s in out)
+
+
+def mcap_required(
+    touched: list[Any], truth: Mapping[str, np.ndarray], batch: int = 100
+) -> dict[str, np.ndarray]:
+    """Per MCAP channel, a mask over the written samples of the messages not touched."""
+    out = {
+        key.partition(":")[2]: np.ones(v.size, bool)
+        for key, v in truth.items()
+        if key.startswith("mcap:accel_")
+    }
+    for topic, seq in touched:
+        name = topic.rpartition("/")[2]
+        if topic.startswith("/accel/") and name in out:
+            out[name][seq * batch : (seq + 1) * batch] = False
+    return out
+
+
 def damages_for(path: Path, data: bytes) -> dict[str, Damage]:
     """Every damage that applies to an intact file, by name."""
     out = dict(_truncations(data))
@@ -526,11 +735,12 @@ def damages_for(path: Path, data: bytes) -> dict[str, Damage]:
     return out
 
 
-def build_corpus(out: str | Path) -> list[dict[str, str]]:
+def build_corpus(out: str | Path) -> list[dict[str, Any]]:
     """Write intact files, damaged files, ``truth.npz`` and ``manifest.json`` into ``out``.
 
     Returns the manifest: one dict per damaged file with ``file`` (relative to ``out``),
-    ``source`` (the intact file), ``family`` (``can``/``mcap``) and ``damage``.
+    ``source`` (the intact file), ``family`` (``can``/``mcap``), ``damage`` and ``touched``
+    (:func:`touched_records`: the records the damage touched, or None).
     """
     root = Path(out)
     files, truth = intact_files(root / "intact")
@@ -553,6 +763,7 @@ def build_corpus(out: str | Path) -> list[dict[str, str]]:
                     "source": path.name,
                     "family": family,
                     "damage": name,
+                    "touched": touched_records(path, data, name),  # type: ignore[dict-item]
                 }
             )
     (root / "manifest.json").write_text(json.dumps(manifest, indent=1))

@@ -144,7 +144,9 @@ class _Parser:
         self.stop = 0
 
     # -- walking object headers --------------------------------------------------------------
-    def walk(self, buf: bytes, origin_of: _Origin) -> tuple[np.ndarray, ...] | None:
+    def walk(
+        self, buf: bytes, origin_of: _Origin, final: bool = True
+    ) -> tuple[np.ndarray, ...] | None:
         """Locate the complete objects of ``buf``.
 
         Returns the offsets, types, header versions, object sizes and header sizes of the
@@ -195,11 +197,15 @@ class _Parser:
                     pos = j + 4
                     continue
                 end = j + osize
-                if end > n or (end + 8 <= n and find(_LOBJ, end, end + 8) < 0):
+                if (end > n and final) or (end + 8 <= n and find(_LOBJ, end, end + 8) < 0):
                     # The object does not end where another begins: a size field that lies
                     # would swallow the objects after it. A plausible header inside the body
-                    # gives the lie away; resynchronise there.
-                    k = self._inner_header(buf, j + 16, min(end, n))
+                    # gives the lie away; resynchronise there. An object that runs past a
+                    # buffer with more data to come is looked at again once it is whole (a
+                    # payload that happens to hold "LOBJ" is no lie). The search starts
+                    # right after the signature: the head of an object cut off by a reordered
+                    # container may be shorter than a header, the next object inside it.
+                    k = self._inner_header(buf, j + 4, min(end, n))
                     if k >= 0:
                         self.report.reject("corrupt_object", 1, f"byte {origin_of(j)}")
                         self.resync = True
@@ -234,6 +240,12 @@ class _Parser:
                         break
                     if count < 4:
                         cooldown = 32
+                    last_end = j + stride * (count - 1) + osize
+                    if count > 1 and last_end + 8 <= n and find(_LOBJ, last_end, last_end + 8) < 0:
+                        # The run's last header is sound but the object does not end where
+                        # another begins (the head of an object whose container was moved):
+                        # leave it to the object-by-object check of the next round.
+                        count -= 1
             starts.append(j)
             strides.append(stride)
             counts.append(count)
@@ -279,7 +291,7 @@ class _Parser:
         buf = block.parts[0] if len(block.parts) == 1 else b"".join(block.parts)
         origin_of = _Origin(np.asarray(block.starts, np.int64),
                             np.asarray(block.origins, np.int64))
-        walked = self.walk(buf, origin_of)
+        walked = self.walk(buf, origin_of, final)
         if walked is not None:
             self._decode(buf, walked, origin_of, out)
         rest = _Block()

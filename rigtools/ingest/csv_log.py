@@ -56,6 +56,22 @@ class _CsvDialect(TextLogDialect):
         self.reader = can.CSVReader(lines)  # type: ignore[arg-type]
         return self.reader
 
+    def prefilter(
+        self, lines: Iterator[tuple[int | None, str]]
+    ) -> Iterator[tuple[int | None, str]]:
+        """Put the header back in front of a file that lost it.
+
+        python-can's ``CSVReader`` skips its first line unread: without the header that
+        is the first frame, lost (a file whose first lines were cut away still reads whole).
+        """
+        first = True
+        for number, text in lines:
+            if first and text.strip():
+                first = False
+                if text.strip() != HEADER:
+                    yield None, HEADER
+            yield number, text
+
     def classify(self, text: str) -> str:
         return OK if text.strip() == HEADER else "unparsable_line"
 

@@ -34,6 +34,8 @@ _MAX_ERRORS_BEFORE_DATA: Final[int] = 20
 _MAX_ERRORS_IN_ROW: Final[int] = 1000
 #: Largest CAN identifier (29-bit extended); python-can parses any hex number of a line.
 _MAX_CAN_ID: Final[int] = 0x1FFFFFFF
+#: Largest standard (11-bit) identifier; a standard frame above it is a damaged line.
+_MAX_STD_ID: Final[int] = 0x7FF
 #: Exceptions python-can raises on malformed lines (int()/float() parsing, tuple unpacking,
 #: missing columns, an unsupported dialect).
 _PARSE_ERRORS: Final = (ValueError, IndexError, KeyError, TypeError, NotImplementedError,
@@ -330,7 +332,9 @@ def _run(
         elif dialect.payload_short(msg):
             report.reject("unparsable_line", 1, where)
             acc.short += 1
-        elif not 0 <= msg.arbitration_id <= _MAX_CAN_ID:
+        elif not 0 <= msg.arbitration_id <= (
+            _MAX_CAN_ID if msg.is_extended_id else _MAX_STD_ID
+        ):
             report.reject("unparsable_line", 1, where)
             acc.bad_id += 1
         else:
@@ -423,7 +427,8 @@ class _Accounting:
         if self.bad_id:
             self.report.warn(
                 f"{path}: {self.bad_id} frame line(s) carry an identifier above 0x1FFFFFFF "
-                "(29 bits, the largest CAN identifier); counted as unparsable_line"
+                "(29 bits, the largest CAN identifier) or a standard-format identifier above "
+                "0x7FF (11 bits); counted as unparsable_line"
             )
         if self.n_events:
             self.report.warn(

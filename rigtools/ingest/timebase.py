@@ -61,6 +61,14 @@ class UnwrappedCounter:
 #: Consecutive usual steps that mark a backwards counter step as a restart, not a late frame.
 RESTART_RUN = 8
 
+#: An endpoint counter is an outlier only when the clock lies within this fraction of the
+#: distance between the usual step and the counter's step from the usual step.
+ENDPOINT_CLOCK_FRACTION = 0.25
+
+#: Replay candidates (counter and clock step back together) checked against payloads; past
+#: this many per channel the rest are taken as replays unchecked (bounds the work).
+MAX_REPLAY_CHECKS = 64
+
 
 def counter_outliers(
     counter: np.ndarray,
@@ -75,7 +83,8 @@ def counter_outliers(
     the counter says something else than the usual step and the logger clock says the usual
     step (it is closer to it than to the counter's step). A lost frame or a late frame
     moves counter and clock together; a flipped counter bit moves the counter alone. The
-    first and the last element are outliers when the clock says the usual step, the counter
+    first and the last element are outliers when the clock clearly says the usual step (within
+    :data:`ENDPOINT_CLOCK_FRACTION` of the distance to the counter's step), the counter
     another, and the :data:`RESTART_RUN` steps on their inner side are usual. Without this a
     single corrupted value reads as a restart (a step back followed by usual steps) and every
     later sample is shifted.
@@ -111,9 +120,16 @@ def counter_outliers(
     out[1:-1] = (clock_says_usual[:-1] & clock_says_usual[1:]
                  & (((c[2:] - c[:-2]) % m) == (2 * typical) % m))
     if n > RESTART_RUN + 1:
-        if clock_says_usual[0] and np.all(d[1 : RESTART_RUN + 1] == typical):
+        # An endpoint has one step to judge by, and a lost frame next to it moves counter
+        # and clock together: the clock must be much closer to the usual step than to the
+        # counter's (within a quarter of their distance), or jitter and quantised stamps
+        # turn a legitimate first or last frame after a loss into an "outlier".
+        with np.errstate(invalid="ignore", over="ignore"):
+            clearly = np.isfinite(clock) & (
+                np.abs(clock - typical) < ENDPOINT_CLOCK_FRACTION * np.abs(step - typical))
+        if clearly[0] and np.all(d[1 : RESTART_RUN + 1] == typical):
             out[0] = True
-        if clock_says_usual[-1] and np.all(d[-RESTART_RUN - 1 : -1] == typical):
+        if clearly[-1] and np.all(d[-RESTART_RUN - 1 : -1] == typical):
             out[-1] = True
     return out
 
@@ -123,6 +139,7 @@ def unwrap_counter(
     modulus: int,
     stamps_s: np.ndarray | None = None,
     tick_rate_Hz: float | None = None,
+    payload: np.ndarray | None = None,
 ) -> UnwrappedCounter:
     """Unwrap a modular sample counter into absolute ticks.
 
@@ -137,6 +154,10 @@ def unwrap_counter(
         long gaps (see Notes). NaN, Inf and outlying stamps are tolerated.
     tick_rate_Hz : float, optional
         Nominal counter rate (ticks per second).
+    payload : numpy.ndarray, optional
+        One fingerprint per element (any array whose rows compare equal when the payloads
+        do), used to tell a replayed run from a restart when the clock steps back with the
+        counter (see Notes).
 
     Returns
     -------
@@ -151,7 +172,11 @@ def unwrap_counter(
     unless the logger clock stepped back with it (by half a tick or more, over the step or
     over the step and the next): that is a run of records logged twice (a duplicated block,
     a replayed container), whose ticks fall on ticks already received and are dropped as
-    duplicates.
+    duplicates -- unless ``payload`` shows that the run carries other data than was received
+    at those ticks: then it is a restart that coincided with a logger clock step. Where the
+    clock steps back and frames are missing, the step is ``d + k M`` with ``k <= 0`` the whole
+    number of wraps closest to the clock, so a block replayed from more than half a wrap back
+    lands on its own ticks instead of one wrap ahead.
 
     The logger clock is consulted only where frames were lost (``d`` differs from the usual
     step) and it says more than half a wrap went by: the step is then ``d + k M`` with ``k``
@@ -173,7 +198,7 @@ def unwrap_counter(
         good = np.flatnonzero(~outlier)
         sub = _unwrap(c[good], int(modulus),
                       None if stamps_s is None else np.asarray(stamps_s, np.float64)[good],
-                      tick_rate_Hz)
+                      tick_rate_Hz, None if payload is None else np.asarray(payload)[good])
         ticks = np.empty(n, np.int64)
         ticks[good] = sub.ticks
         prev = np.maximum.accumulate(np.where(outlier, -1, np.arange(n)))
@@ -183,11 +208,15 @@ def unwrap_counter(
         keep[good] = sub.keep
         return UnwrappedCounter(ticks, keep, sub.n_duplicate, sub.n_reordered,
                                 good[sub.restarts], sub.clock_jumps, int(outlier.sum()))
-    return _unwrap(c, int(modulus), stamps_s, tick_rate_Hz)
+    return _unwrap(c, int(modulus), stamps_s, tick_rate_Hz, payload)
 
 
 def _unwrap(
-    c: np.ndarray, m: int, stamps_s: np.ndarray | None, tick_rate_Hz: float | None
+    c: np.ndarray,
+    m: int,
+    stamps_s: np.ndarray | None,
+    tick_rate_Hz: float | None,
+    payload: np.ndarray | None = None,
 ) -> UnwrappedCounter:
     n = c.shape[0]
     d = np.diff(c) % m
@@ -211,21 +240,42 @@ def _unwrap(
             k[long_gap] = np.round((expected[long_gap] - d[long_gap]) / m)
             k = np.clip(k, 0, (1 << 40) // m)
             step = np.where(long_gap, d + k.astype(np.int64) * m, step)
+        # The clock went back (a replayed or reordered run, carrying its original stamps):
+        # the step is the one closest to the clock, ``d + k M`` with ``k <= 0``, so a run
+        # replayed from more than half a wrap back is not taken for a forward step.
+        back_stays = np.ones(d.size, bool)
+        back_stays[:-1] = ~(np.isfinite(expected[1:]) & (expected[1:] > m / 4)
+                            & (d[1:] == typical))
+        back = np.isfinite(expected) & (expected <= -0.5) & lost & back_stays
+        if back.any():
+            kb = np.clip(np.round((expected[back] - d[back]) / m), -((1 << 40) // m), 0)
+            step = step.astype(np.int64, copy=True)
+            step[back] = d[back] + kb.astype(np.int64) * m
     step = step.astype(np.int64, copy=False)
-    restarts = []
+    restarts: list[int] = []
+    replay_candidates = []
     for p in np.flatnonzero(step < 0):
         following = d[p + 1 : p + 1 + RESTART_RUN]
         if following.size == RESTART_RUN and np.all(following == typical):
             if expected is not None and _clock_went_back(expected, int(p)):
-                continue  # the clock went back with the counter: a replayed run, not a restart
-            step[p] = typical
-            if expected is not None and np.isfinite(expected[p]) and expected[p] > 0:
-                step[p] = max(1, min(round(expected[p]), 1 << 40))
-            restarts.append(p + 1)
-    ticks = np.empty(n, np.int64)
-    ticks[0] = c[0]
-    np.cumsum(step, out=ticks[1:])
-    ticks[1:] += c[0]
+                replay_candidates.append(int(p))  # decided below, by the payloads
+                continue
+            _resync(step, expected, int(p), typical)
+            restarts.append(int(p) + 1)
+    ticks = _cum_ticks(c[0], step)
+    if payload is not None and replay_candidates:
+        # The clock went back with the counter: a replay only if the run repeats what was
+        # received at those ticks; different payloads mean a genuine restart that coincided
+        # with a logger clock step (NTP/PTP adjustment).
+        fp = np.asarray(payload)
+        order = np.argsort(ticks, kind="stable")
+        for q in replay_candidates[:MAX_REPLAY_CHECKS]:
+            if _payload_differs(ticks, order, fp, q):
+                _resync(step, expected, q, typical)
+                restarts.append(q + 1)
+                ticks = _cum_ticks(c[0], step)
+                order = np.argsort(ticks, kind="stable")
+        restarts.sort()
     keep = np.ones(n, bool)
     if np.all(step > 0):
         return UnwrappedCounter(ticks, keep, 0, 0, np.asarray(restarts, np.int64), clock_jumps)
@@ -238,6 +288,43 @@ def _unwrap(
     return UnwrappedCounter(ticks, keep, int(np.count_nonzero(same)),
                             int(np.count_nonzero(late & keep)),
                             np.asarray(restarts, np.int64), clock_jumps)
+
+
+def _cum_ticks(c0: int, step: np.ndarray) -> np.ndarray:
+    ticks = np.empty(step.size + 1, np.int64)
+    ticks[0] = c0
+    np.cumsum(step, out=ticks[1:])
+    ticks[1:] += c0
+    return ticks
+
+
+def _resync(step: np.ndarray, expected: np.ndarray | None, p: int, typical: int) -> None:
+    """Resynchronise a restarted counter: the step is the logger clock's, else usual."""
+    step[p] = typical
+    if expected is not None and np.isfinite(expected[p]) and expected[p] > 0:
+        step[p] = max(1, min(round(expected[p]), 1 << 40))
+
+
+def _payload_differs(ticks: np.ndarray, order: np.ndarray, fp: np.ndarray, p: int) -> bool:
+    """True when the run after step ``p`` lands on ticks received before with other payloads.
+
+    The run is the :data:`RESTART_RUN` + 1 elements after the step. Each is compared with
+    the first arrival of its tick, if that arrived at or before ``p``; the run differs when
+    fewer than half of the compared elements are equal (a replay of a record damaged in one
+    place still reads as a replay). No compared element: no evidence, not a restart.
+    """
+    run = np.arange(p + 1, min(p + 2 + RESTART_RUN, ticks.size))
+    sorted_ticks = ticks[order]
+    pos = np.searchsorted(sorted_ticks, ticks[run], side="left")
+    pos = np.minimum(pos, ticks.size - 1)
+    first = order[pos]
+    earlier = (sorted_ticks[pos] == ticks[run]) & (first <= p)
+    if not earlier.any():
+        return False
+    equal = fp[run[earlier]] == fp[first[earlier]]
+    if equal.ndim > 1:
+        equal = equal.all(axis=tuple(range(1, equal.ndim)))
+    return bool(2 * np.count_nonzero(equal) < equal.size)
 
 
 def _clock_went_back(expected: np.ndarray, p: int) -> bool:

@@ -18,6 +18,7 @@ file has no start time and gives the offset alone.
 
 from __future__ import annotations
 
+import logging
 import re
 from collections.abc import Iterable, Iterator
 from typing import BinaryIO, Final
@@ -175,4 +176,27 @@ def iter_batches(
     ValueError
         ``batch_frames`` is not a positive integer.
     """
-    return read_text_log(_TrcDialect(), stream, path, report, batch_frames=batch_frames)
+    return _quiet(read_text_log(_TrcDialect(), stream, path, report, batch_frames=batch_frames))
+
+
+class _DropParseFailures(logging.Filter):
+    """Drops python-can's per-line "TRCReader: Failed to parse message" records."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not str(record.msg).startswith("TRCReader: Failed to parse message")
+
+
+def _quiet(batches: Iterator[CanFrameBatch]) -> Iterator[CanFrameBatch]:
+    """``batches`` with python-can's TRC logger kept from printing a line per bad line.
+
+    Each such line is already counted ``unparsable_line`` with its line number; python-can
+    would also log it (33 lines on stderr for a UTF-16 file). The filter is on the
+    ``can.io.trc`` logger only while the read runs, and only drops those records.
+    """
+    logger = logging.getLogger("can.io.trc")
+    quiet = _DropParseFailures()
+    logger.addFilter(quiet)
+    try:
+        yield from batches
+    finally:
+        logger.removeFilter(quiet)

@@ -333,3 +333,31 @@ def test_content_decides_the_reader_whatever_the_suffix(tmp_path, source):
     assert rec.provenance.reader == "candump"
     np.testing.assert_array_equal(rec.channels["accel_1"].values,
                                   want["accel_1"][: len(rec.channels["accel_1"])])
+
+
+def test_restart_with_a_logger_clock_step_back_keeps_both_runs(tmp_path):
+    """A sensor restart (counter back to 0) at the moment the logger clock steps back 1 ms.
+
+    Review of issue 12 (r5, defect 4): the clock going back with the counter was taken for a
+    replayed block, and the 100 frames after the restart were dropped as duplicates. Their
+    payloads differ from the frames first received at those counter values, so it is a
+    restart: every frame is kept, the second run right after the first (the resynchronised
+    step is the usual one, as the clock cannot say more), and the restart is reported.
+    """
+    rng = np.random.default_rng(8)
+    n = 3 * 100  # samples per channel and run
+    runs = [[rng.normal(0, 30, n) for _ in range(4)] for _ in range(2)]
+    first = encode_reference_frames(runs[0], {}, start_time_s=START, first_counter=0, rng=1)
+    t_next = float(first.timestamp_s.max()) + 3 / FS - 1e-3  # the clock steps back 1 ms
+    second = encode_reference_frames(runs[1], {}, start_time_s=t_next, first_counter=0, rng=2)
+    frames = concat([first, second])
+    rec = read(write_can_log(tmp_path / "restart.log", frames, "log"))
+    assert rec.report.rejected["duplicate_frame"] == 0, rec.report.to_dict()
+    assert any("restarted" in w for w in rec.report.warnings)
+    want = [quantise_reference(r) for r in runs]
+    for name in want[0]:
+        ch = rec.channels[name]
+        assert ch.valid.all()
+        np.testing.assert_array_equal(
+            ch.values, np.concatenate([want[0][name], want[1][name]]), err_msg=name
+        )

@@ -10,8 +10,10 @@ over-long lines, UTF-16 and duplicated, dropped and shuffled lines or containers
 
 The oracle is ``make_damaged_corpus.check_against_truth`` against the samples the writers
 were given: ``read`` returns a Recording whose valid samples all equal the written ones at
-their absolute index, whose missing samples inside a channel are counted, and whose slow
-values were all written; or it raises a :class:`rigtools.errors.RigtoolsError`. No damage in
+their absolute index, that holds every sample of every record the damage did not touch
+(``touched`` in the manifest, :func:`make_damaged_corpus.touched_records`), whose missing
+samples inside a channel are counted, and whose slow values were all written; or it raises
+a :class:`rigtools.errors.RigtoolsError`. No damage in
 the corpus changes a sample silently (every flip lands in CRC-checked or compressed data, or
 in a line that no longer parses), so no wrong sample is tolerated. The intact files must read
 back complete with nothing counted. Each read stays within the time bound of the other
@@ -26,7 +28,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from make_damaged_corpus import build_corpus, check_against_truth
+from make_damaged_corpus import (
+    build_corpus,
+    can_frames,
+    can_row_samples,
+    check_against_truth,
+    mcap_required,
+    required_samples,
+)
 
 from rigtools.errors import RigtoolsError
 from rigtools.ingest import read
@@ -101,6 +110,7 @@ def test_corpus_covers_every_reader_and_damage(corpus):
 
 def test_every_reader_over_every_damaged_file(corpus, intact):
     root, manifest, truth = corpus
+    names, start, k = can_row_samples(can_frames())
     outcome: dict[str, list[str]] = {"read": [], "refused": []}
     failures = []
     for m in manifest:
@@ -121,8 +131,24 @@ def test_every_reader_over_every_damaged_file(corpus, intact):
         if cpu > MAX_CPU_S_FIXED + MAX_CPU_S_PER_MB * size / 1e6:
             failures.append(f"{m['file']}: {cpu:.2f} s CPU for {size} bytes")
         outcome["read"].append(m["file"])
+        required = None
+        if m["touched"] is not None:
+            if m["family"] == "can":
+                keep = sorted(set(range(len(names))) - set(m["touched"]))
+                required = required_samples(names, start, k, keep, truth)
+            else:
+                required = mcap_required(m["touched"], truth)
         try:
-            got = check_against_truth(rec, truth, m["family"], intact=intact[m["source"]])
+            # Every sample of a record the damage did not touch comes back, equal: no lost
+            # intact sample is tolerated (no damage of the corpus makes a twin of a record).
+            got = check_against_truth(
+                rec,
+                truth,
+                m["family"],
+                intact=intact[m["source"]],
+                required=required,
+                tolerance_lost=0,
+            )
         except AssertionError as exc:
             failures.append(f"{m['file']}: {exc}")
             continue
@@ -138,3 +164,79 @@ def test_every_reader_over_every_damaged_file(corpus, intact):
     assert not failures, "\n".join(failures)
     # Most damaged files still give data: damage costs the damaged part, not the file.
     assert len(outcome["read"]) > 0.75 * len(manifest), len(outcome["read"])
+
+
+# --- the time bound per megabyte, on files large enough for it to matter (review r5, 6) --------
+
+
+@pytest.fixture(scope="module")
+def large_frames():
+    """160,000 reference frames (40,000 per channel at 3 samples a frame, counter wrapping)."""
+    from rigtools.demo.can_writer import encode_reference_frames, quantise_reference
+
+    rng = np.random.default_rng(21)
+    chans = {f"accel_{i + 1}": rng.normal(0, 30, 3 * 40_000) for i in range(4)}
+    frames = encode_reference_frames(chans, {"Torque_Nm": 1.0}, first_counter=0, rng=21)
+    truth = {f"can:{k}": v for k, v in quantise_reference(chans).items()}
+    truth["can:first_index"] = np.array([0])
+    return frames, truth
+
+
+def _damage_large(data: bytes) -> bytes:
+    """Three flipped bytes spread over the file and the last 5 % cut away."""
+    b = bytearray(data[: len(data) * 19 // 20])
+    for frac in (0.3, 0.5, 0.7):
+        b[int(frac * len(b))] ^= 0x10
+    return bytes(b)
+
+
+def _read_within_bound(path: Path, min_bytes: int = 5_000_000):
+    size = path.stat().st_size
+    assert size >= min_bytes, size  # the per-MB term must dominate the fixed one
+    t0 = time.process_time()
+    try:
+        rec = read(path)
+    except RigtoolsError as exc:  # pragma: no cover - the damage is local: must read
+        pytest.fail(f"refused: {exc}")
+    cpu = time.process_time() - t0
+    assert cpu <= MAX_CPU_S_FIXED + MAX_CPU_S_PER_MB * size / 1e6, f"{cpu:.2f} s for {size} B"
+    return rec
+
+
+@pytest.mark.parametrize("fmt", ["blf", "log"])
+def test_time_bound_on_a_large_damaged_can_log(tmp_path, large_frames, fmt):
+    """A 5-8 MB BLF (stored containers) or candump log, flipped in three places and cut short.
+
+    The files of the corpus are 10-80 kB, where the fixed 0.5 s dominates the bound; here the
+    5 s/MB term does (a walker quadratic in the file size would not make it). The read must
+    also keep the data: at least 90 % of the samples come back, equal.
+    """
+    from rigtools.demo.can_writer import blf_bytes, write_can_log
+
+    frames, truth = large_frames
+    if fmt == "blf":
+        data = blf_bytes(frames, compression_level=0)
+    else:
+        data = write_can_log(tmp_path / "big_intact.log", frames, "log").read_bytes()
+    p = tmp_path / f"big.{fmt}"
+    p.write_bytes(_damage_large(data))
+    rec = _read_within_bound(p)
+    got = check_against_truth(rec, truth, "can", tolerance_samples=3 * 3)
+    assert got.matched >= 0.9 * sum(v.size for k, v in truth.items() if "accel" in k)
+
+
+def test_time_bound_on_a_large_damaged_mcap(tmp_path):
+    """A 6 MB zstd MCAP (two channels of 800,000 float32 samples), damaged as above."""
+    from rigtools.demo.mcap_writer import write_accel_mcap
+
+    rng = np.random.default_rng(22)
+    chans = {k: rng.standard_normal(800_000).astype(np.float32) for k in ("accel_1", "accel_2")}
+    spec = {k: (v, 10_000.0, "g", 0, 1.7e9) for k, v in chans.items()}
+    src = write_accel_mcap(tmp_path / "big_intact.mcap", spec, None, batch=1000, chunk_size=1 << 18)
+    p = tmp_path / "big.mcap"
+    p.write_bytes(_damage_large(src.read_bytes()))
+    rec = _read_within_bound(p)
+    truth = {f"mcap:{k}": v.astype(np.float64) for k, v in chans.items()}
+    truth["mcap:first_index"] = np.array([0])
+    got = check_against_truth(rec, truth, "mcap")
+    assert got.matched >= 0.8 * 1_600_000

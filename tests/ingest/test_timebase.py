@@ -120,3 +120,67 @@ def test_indices_from_stamps_do_not_hinge_on_a_jittered_first_stamp():
     t[0] = 0.45e-3
     idx = indices_from_stamps(t, 1000.0)
     assert np.array_equal(idx, np.arange(2000))
+
+
+# Regressions from the review of the fuzz suite (r5, defects 3-5); reproducers as given there.
+RATE = 8533.0  # reference frame rate (ticks/s), data_schemas/rig_reference.dbc
+
+
+def test_block_replayed_from_more_than_half_a_wrap_back_lands_on_its_own_ticks():
+    # 16-bit counter: ticks 0..49999, then 0..999 logged again with their original stamps,
+    # then 50000..50099. The step 49999 -> 0 is 15537 forward modulo 65536, but the clock went
+    # back 49999 ticks: the replay must fall on ticks 0..999 (duplicates), not at 65536...
+    ticks = np.r_[np.arange(50_000), np.arange(1000), np.arange(50_000, 50_100)]
+    un = unwrap_counter(ticks % 65536, 65536, ticks / RATE, RATE)
+    assert un.n_duplicate == 1000 and un.restarts.size == 0
+    assert np.array_equal(un.ticks, ticks)  # true tick 50000 at 50000, not 115536
+    assert np.array_equal(un.ticks[un.keep], np.arange(50_100))
+
+
+def test_restart_with_a_simultaneous_clock_step_back_is_a_restart_when_payloads_differ():
+    # 60 frames, counter restarts to 0 at frame 30 while the logger clock steps back 1 ms
+    # (NTP/PTP step). Different payloads: a restart, every frame kept. Same payloads as at
+    # those ticks: a replay, 30 duplicates (the earlier rule, kept when payloads agree).
+    c = np.r_[np.arange(30), np.arange(30)]
+    t = np.arange(60) / RATE
+    t[30:] -= 1e-3
+    payload = np.arange(60) * 7
+    un = unwrap_counter(c, 65536, t, RATE, payload=payload)
+    assert un.keep.all() and un.n_duplicate == 0
+    assert un.restarts.tolist() == [30]
+    assert np.array_equal(un.ticks, np.arange(60))
+    replay = unwrap_counter(c, 65536, t, RATE, payload=np.r_[payload[:30], payload[:30]])
+    assert replay.n_duplicate == 30 and replay.restarts.size == 0
+    assert np.array_equal(replay.ticks[replay.keep], np.arange(30))
+
+
+@pytest.mark.parametrize("where", ["first", "last"])
+@pytest.mark.parametrize("clock", ["quantised_1ms", "jitter_0.35_tick"])
+def test_endpoint_next_to_a_lost_frame_is_not_an_outlier(where, clock):
+    # Ticks [0, 2, 3, ..., 39] (frame 1 lost) or [0..37, 39] (frame 38 lost): the clock moves
+    # with the counter, only blurred by 1 ms stamp quantisation (USB batching) or by
+    # +-0.35 tick jitter; the endpoint frame is intact and must be kept at its tick.
+    ticks = np.r_[0, np.arange(2, 40)] if where == "first" else np.r_[np.arange(38), 39]
+    if clock == "quantised_1ms":
+        t = np.floor(ticks / RATE * 1000) / 1000
+    else:
+        # Alternating jitter, arranged so that the clock over the endpoint's step reads
+        # 2 - 0.7 = 1.3 ticks: nearer the usual step (1) than the counter's (2).
+        jitter = np.where(np.arange(ticks.size) % 2 == 0, 0.35, -0.35)
+        if where == "last":
+            jitter = -jitter if ticks.size % 2 else jitter
+        t = (ticks + jitter) / RATE
+    un = unwrap_counter(ticks, 65536, t, RATE)
+    assert un.n_outlier == 0 and un.keep.all()
+    assert np.array_equal(un.ticks, ticks)
+
+
+def test_flipped_high_bit_on_an_endpoint_is_still_an_outlier():
+    # The stricter endpoint rule must not give up a flip the clock clearly contradicts.
+    ticks = np.arange(40)
+    c = ticks.copy()
+    c[0] ^= 1 << 12
+    t = ticks / RATE
+    un = unwrap_counter(c, 65536, t, RATE)
+    assert un.n_outlier == 1 and not un.keep[0]
+    assert np.array_equal(un.ticks[1:], ticks[1:])
