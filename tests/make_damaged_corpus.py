@@ -39,6 +39,7 @@ import json
 import random
 import re
 import struct
+import tracemalloc
 import zlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -48,7 +49,11 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "ALLOC_FIXED_BYTES",
+    "ALLOC_MULTIPLE",
     "CAN_FIRST_COUNTER",
+    "MAX_CPU_S_FIXED",
+    "MAX_CPU_S_PER_MB",
     "MCAP_FIRST_INDEX",
     "OracleResult",
     "build_corpus",
@@ -58,9 +63,41 @@ __all__ = [
     "intact_files",
     "main",
     "mcap_required",
+    "peak_bytes",
     "required_samples",
     "touched_records",
 ]
+
+# --- the bounds every reader keeps, whatever the input (issue 12) --------------------------------
+#: CPU time a read may take whatever the input, plus ...
+MAX_CPU_S_FIXED = 0.5
+#: ... this much per megabyte of input (s/MB). Measured: about 0.3 s/MB for ASC and TRC (python-can
+#: parses each line), under 0.05 s/MB for candump, CSV, BLF and MCAP.
+MAX_CPU_S_PER_MB = 5.0
+#: Peak Python heap of a read (tracemalloc) is at most this multiple of the file size ...
+ALLOC_MULTIPLE = 64
+#: ... plus this (bytes): the readers' fixed buffers (``blf.PARSE_BYTES`` of inflated objects, one
+#: container or chunk) and the Recording's arrays for a small file.
+ALLOC_FIXED_BYTES = 24 << 20
+
+
+def peak_bytes(fn: Callable[[], Any]) -> tuple[int, object]:
+    """Peak traced Python heap (bytes) while ``fn`` runs, and what it returned (or raised).
+
+    A :class:`~rigtools.errors.RigtoolsError` is returned, not raised (refusing is allowed).
+    """
+    from rigtools.errors import RigtoolsError
+
+    tracemalloc.start()
+    try:
+        try:
+            out: object = fn()
+        except RigtoolsError as exc:
+            out = exc
+        return tracemalloc.get_traced_memory()[1], out
+    finally:
+        tracemalloc.stop()
+
 
 #: Frame counter of the first frame of every CAN channel (wraps after 536 frames).
 CAN_FIRST_COUNTER = 65_000

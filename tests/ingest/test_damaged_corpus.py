@@ -29,6 +29,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from make_damaged_corpus import (
+    MAX_CPU_S_FIXED,
+    MAX_CPU_S_PER_MB,
     build_corpus,
     can_frames,
     can_row_samples,
@@ -39,9 +41,6 @@ from make_damaged_corpus import (
 
 from rigtools.errors import RigtoolsError
 from rigtools.ingest import read
-
-MAX_CPU_S_FIXED = 0.5  # as in test_fuzz_text_logs.py
-MAX_CPU_S_PER_MB = 5.0
 
 #: Damages after which the reader must still return data (not refuse the file): the intact
 #: part is large and the damage local. Everything else may also be refused with a

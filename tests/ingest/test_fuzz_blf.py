@@ -28,7 +28,6 @@ import shutil
 import struct
 import tempfile
 import time
-import tracemalloc
 import zlib
 from pathlib import Path
 
@@ -37,21 +36,20 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from make_damaged_corpus import can_row_samples, check_against_truth, required_samples
+from make_damaged_corpus import (
+    ALLOC_FIXED_BYTES,
+    ALLOC_MULTIPLE,
+    MAX_CPU_S_FIXED,
+    MAX_CPU_S_PER_MB,
+    can_row_samples,
+    check_against_truth,
+    peak_bytes,
+    required_samples,
+)
 
 from rigtools.demo.can_writer import encode_reference_frames, quantise_reference
 from rigtools.errors import RigtoolsError
 from rigtools.ingest import read
-
-#: CPU time a read may take whatever the input, plus ...
-MAX_CPU_S_FIXED = 0.5
-#: ... this much per megabyte of input (s/MB).
-MAX_CPU_S_PER_MB = 5.0
-#: Peak Python heap of a read (tracemalloc) is at most this multiple of the file size ...
-ALLOC_MULTIPLE = 64
-#: ... plus this (bytes): the reader's fixed buffers (``blf.PARSE_BYTES`` of inflated objects,
-#: one container) and the Recording's arrays for a small file.
-ALLOC_FIXED_BYTES = 24 << 20
 
 FIRST_COUNTER = 65_500
 N_FRAMES = 60  # per channel
@@ -334,19 +332,6 @@ def test_long_profile(level, frac, flips, op, a, width, seed):
 
 
 # --- length fields that claim gigabytes --------------------------------------------------------
-
-
-def peak_bytes(fn) -> tuple[int, object]:
-    """Peak traced Python heap (bytes) while ``fn`` runs, and what it returned (or raised)."""
-    tracemalloc.start()
-    try:
-        try:
-            out: object = fn()
-        except RigtoolsError as exc:
-            out = exc
-        return tracemalloc.get_traced_memory()[1], out
-    finally:
-        tracemalloc.stop()
 
 
 def _claims() -> list[tuple[str, int, str, int]]:

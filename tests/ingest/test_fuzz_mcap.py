@@ -28,28 +28,24 @@ import shutil
 import struct
 import tempfile
 import time
-import tracemalloc
 from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from make_damaged_corpus import check_against_truth
+from make_damaged_corpus import (
+    ALLOC_FIXED_BYTES,
+    ALLOC_MULTIPLE,
+    MAX_CPU_S_FIXED,
+    MAX_CPU_S_PER_MB,
+    check_against_truth,
+    peak_bytes,
+)
 
 from rigtools.demo.mcap_writer import write_accel_mcap
 from rigtools.errors import RigtoolsError
 from rigtools.ingest import read
-
-#: CPU time a read may take whatever the input, plus ...
-MAX_CPU_S_FIXED = 0.5
-#: ... this much per megabyte of input (s/MB).
-MAX_CPU_S_PER_MB = 5.0
-#: Peak Python heap of a read (tracemalloc) is at most this multiple of the file size ...
-ALLOC_MULTIPLE = 64
-#: ... plus this (bytes): one chunk's records limit, the decompression worker's buffers and
-#: the Recording's arrays for a small file.
-ALLOC_FIXED_BYTES = 24 << 20
 
 FIRST = 5_000
 N = 1_500
@@ -375,19 +371,6 @@ def test_long_profile(variant, frac, flips, op, a, width, seed):
 
 
 # --- length fields that claim gigabytes --------------------------------------------------------
-
-
-def peak_bytes(fn) -> tuple[int, object]:
-    """Peak traced Python heap (bytes) while ``fn`` runs, and what it returned (or raised)."""
-    tracemalloc.start()
-    try:
-        try:
-            out: object = fn()
-        except RigtoolsError as exc:
-            out = exc
-        return tracemalloc.get_traced_memory()[1], out
-    finally:
-        tracemalloc.stop()
 
 
 def _claims(variant: str) -> list[tuple[str, int, int]]:

@@ -38,17 +38,17 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from make_damaged_corpus import can_row_samples, check_against_truth, required_samples
+from make_damaged_corpus import (
+    MAX_CPU_S_FIXED,
+    MAX_CPU_S_PER_MB,
+    can_row_samples,
+    check_against_truth,
+    required_samples,
+)
 
 from rigtools.demo.can_writer import encode_reference_frames, quantise_reference, write_can_log
 from rigtools.errors import RigtoolsError
 from rigtools.ingest import read
-
-#: CPU time a read may take whatever the input, plus ...
-MAX_CPU_S_FIXED = 0.5
-#: ... this much per megabyte of input (s/MB). Measured: about 0.3 s/MB for ASC and TRC
-#: (python-can parses each line), under 0.05 s/MB for candump and CSV.
-MAX_CPU_S_PER_MB = 5.0
 
 FIRST_COUNTER = 65_510  # wraps after 26 frames
 N_FRAMES = 48  # per channel
