@@ -1,15 +1,20 @@
 """Signal analysis of Recordings: spectra, natural frequencies with damping, RMS, mesh orders.
 
 Modules: :mod:`~rigtools.analysis.windows` (gap-aware segmenting),
-:mod:`~rigtools.analysis.spectra` (Welch PSD, amplitude spectrum, band RMS, quality checks),
+:mod:`~rigtools.analysis.spectra` (Welch PSD, amplitude spectrum, band RMS, quality checks; over
+:mod:`~rigtools.analysis.signal_checks`, :mod:`~rigtools.analysis.spectral_window`,
+:mod:`~rigtools.analysis.welch`, :mod:`~rigtools.analysis.rms`,
+:mod:`~rigtools.analysis.spectrum_results`),
 :mod:`~rigtools.analysis.peaks` (peak detection and mesh-line classification),
 :mod:`~rigtools.analysis.sdof_fit` (half-power damping and the single-DOF fit),
 :mod:`~rigtools.analysis.recording` (the :func:`analyse_recording` entry point),
 :mod:`~rigtools.analysis.speed` (shaft speed from a slow signal or a tacho, mesh frequency,
-speed steps), :mod:`~rigtools.analysis.resample` (angular resampling),
+speed steps; over :mod:`~rigtools.analysis.speed_types`, :mod:`~rigtools.analysis.tacho`,
+:mod:`~rigtools.analysis.speed_steps`), :mod:`~rigtools.analysis.resample` (angular resampling),
 :mod:`~rigtools.analysis.order_spectra` (order spectra, mesh harmonics, displacement),
 :mod:`~rigtools.analysis.campbell` (Campbell data), :mod:`~rigtools.analysis.orders` (Arms per
-step and along a run-up) and :mod:`~rigtools.analysis.observations` (the campaign table).
+step and along a run-up) and :mod:`~rigtools.analysis.observations` (the campaign table; its columns in
+:mod:`~rigtools.analysis.observation_table`, its files in :mod:`~rigtools.analysis.observation_files`).
 """
 
 from rigtools.analysis.orders import (

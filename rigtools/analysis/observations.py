@@ -68,17 +68,27 @@ versions (``rigtools.observations``); :func:`read_observations` reads it back an
 
 from __future__ import annotations
 
-import json
 import math
-import os
-from collections.abc import Callable, Iterable, Mapping
-from dataclasses import dataclass, field
-from pathlib import Path
+from collections.abc import Callable
 from typing import Any, Final
 
 import numpy as np
-import pandas as pd
 
+from rigtools.analysis.observation_files import (
+    read_observations,
+    validate_observations,
+    write_observations,
+)
+from rigtools.analysis.observation_table import (
+    FLAGS,
+    METADATA_KEY,
+    SCHEMA,
+    SCHEMA_METADATA_KEY,
+    Observations,
+    RunObservations,
+    observation_columns,
+    to_frame,
+)
 from rigtools.analysis.orders import (
     RunUpCurve,
     StepLevels,
@@ -95,7 +105,6 @@ from rigtools.analysis.speed import (
 )
 from rigtools.campaign import CONDITION_KEYS, Campaign, CampaignRun
 from rigtools.errors import RigtoolsError
-from rigtools.schemas import iter_errors, load_schema
 
 __all__ = [
     "FLAGS",
@@ -113,36 +122,6 @@ __all__ = [
     "write_observations",
 ]
 
-SCHEMA: Final = "observations.schema.json"
-#: Parquet key-value metadata key holding the schema's JSON.
-SCHEMA_METADATA_KEY: Final = "rigtools.observations.schema"
-#: Parquet key-value metadata key holding the campaign, settings and versions (JSON).
-METADATA_KEY: Final = "rigtools.observations"
-
-#: Every flag a row may carry, and what it means.
-FLAGS: Final[dict[str, str]] = {
-    "gaps": "gaps or invalid samples in the channel (or run, or step)",
-    "clipping": "runs of samples at the channel's extreme values",
-    "low_snr": "peak prominence or mesh harmonic level under [analysis] low_snr_dB",
-    "windows_dropped": "valid segments shorter than a Welch window, or order blocks lost to gaps",
-    "ingest_losses": "frames or messages rejected at ingest",
-    "at_mesh_line": "a broad peak within tolerance of a mesh harmonic, sideband or shaft line",
-    "no_structural_peak": "no structural peak found in the channel's PSD",
-    "peaks_failed": "the peak analysis of the channel failed",
-    "constant": "every valid sample equal",
-    "too_short": "no valid segment as long as one Welch window",
-    "unit_not_acceleration": "the channel's unit is not an acceleration rigtools converts",
-    "channel_missing": "a channel named in [sensors] accel is not in the recording",
-    "condition_unresolved": "a condition names a slow signal that is absent or has no value",
-    "speed_missing": "the speed signal is absent or covers none of the data",
-    "no_speed_step": "no speed plateau long enough for a step",
-    "speed_varies": "the run's speed varies beyond the step tolerance: the mesh line sweeps the "
-                    "PSD, smeared; a natural frequency may be that swept line, not a mode",
-    "step_without_block": "a speed step without one whole order block",
-    "above_passband": "a mesh harmonic above the angular resampler's passband",
-    "arms_failed": "the order analysis of the channel failed",
-    "run_failed": "the run could not be read or analysed",
-}
 
 #: Acceleration units and their factor to m/s^2.
 _ACCEL_TO_M_S2: Final[dict[str, float]] = {
@@ -156,108 +135,6 @@ _TEMPERATURE_OFFSET_C: Final[dict[str, float]] = {
     "degC": 0.0, "°C": 0.0, "C": 0.0, "deg C": 0.0, "celsius": 0.0, "K": -273.15,
 }
 _HARMONICS: Final = (1, 2, 3)
-
-
-# --------------------------------------------------------------------------------------------
-# columns from the schema
-
-
-def observation_columns() -> dict[str, str]:
-    """Column name -> pandas dtype, in table order, from ``data_schemas/observations.schema.json``.
-
-    ``number`` -> ``float64``, ``integer`` -> ``Int64``, ``boolean`` -> ``boolean``, strings and
-    enums -> ``object`` (str or None).
-    """
-    props = load_schema(SCHEMA)["$defs"]["row"]["properties"]
-    out = {}
-    for name, p in props.items():
-        types = p.get("type", "string")
-        types = [types] if isinstance(types, str) else list(types)
-        if "number" in types:
-            out[name] = "float64"
-        elif "integer" in types:
-            out[name] = "Int64"
-        elif "boolean" in types:
-            out[name] = "boolean"
-        else:
-            out[name] = "object"
-    return out
-
-
-def to_frame(rows: Iterable[Mapping[str, Any]]) -> pd.DataFrame:
-    """Rows (dicts with any subset of the columns) as a table with every column, typed."""
-    cols = observation_columns()
-    records = [{c: r.get(c) for c in cols} for r in rows]
-    df = pd.DataFrame.from_records(records, columns=list(cols))
-    for c, dtype in cols.items():
-        if dtype == "float64":
-            df[c] = pd.to_numeric(df[c].astype(object).where(df[c].notna(), np.nan),
-                                  errors="raise").astype("float64")
-        elif dtype == "object":
-            df[c] = df[c].astype(object).where(df[c].notna(), None)
-        else:
-            df[c] = df[c].astype(dtype)
-    return df
-
-
-# --------------------------------------------------------------------------------------------
-# results
-
-
-@dataclass(frozen=True)
-class RunObservations:
-    """The rows of one run and whether it could be analysed.
-
-    Attributes
-    ----------
-    run_id : str
-    file : str
-        The recording as resolved from the campaign.
-    rows : tuple of dict
-        Rows of the table (see the module docstring).
-    analysed : bool
-        The run was read and at least one channel analysed.
-    error : str or None
-        Why the run failed (the file and the reason), when it did.
-    warnings : tuple of str
-        Problems that flagged rows but did not fail the run.
-    """
-
-    run_id: str
-    file: str
-    rows: tuple[dict[str, Any], ...]
-    analysed: bool
-    error: str | None = None
-    warnings: tuple[str, ...] = ()
-
-
-@dataclass(frozen=True)
-class Observations:
-    """The observations of a campaign.
-
-    Attributes
-    ----------
-    table : pandas.DataFrame
-        The tidy table (columns: :func:`observation_columns`).
-    runs : tuple of RunObservations
-        Per run, in campaign order.
-    metadata : dict
-        Resolved campaign, analysis settings, versions (JSON-ready; written with the table).
-    """
-
-    table: pd.DataFrame
-    runs: tuple[RunObservations, ...]
-    metadata: dict[str, Any] = field(default_factory=dict)
-
-    @property
-    def n_analysed(self) -> int:
-        """Runs analysed."""
-        return sum(r.analysed for r in self.runs)
-
-    @property
-    def failures(self) -> tuple[RunObservations, ...]:
-        """Runs that failed."""
-        return tuple(r for r in self.runs if not r.analysed)
 
 
 # --------------------------------------------------------------------------------------------
@@ -797,112 +674,3 @@ def _metadata(campaign: Campaign, runs: list[RunObservations]) -> dict[str, Any]
         "runs": [{"id": r.run_id, "file": r.file, "analysed": r.analysed, "error": r.error}
                  for r in runs],
     }
-
-
-# --------------------------------------------------------------------------------------------
-# files
-
-
-def write_observations(obs: Observations | pd.DataFrame, path: str | Path,
-                       metadata: Mapping[str, Any] | None = None) -> Path:
-    """Write the table as Parquet, with the schema and the metadata in the file's metadata.
-
-    Parameters
-    ----------
-    obs : Observations or pandas.DataFrame
-    path : str or pathlib.Path
-    metadata : mapping, optional
-        Metadata for a bare DataFrame (an Observations carries its own).
-
-    Returns
-    -------
-    pathlib.Path
-    """
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
-    if isinstance(obs, Observations):
-        df, meta = obs.table, dict(obs.metadata)
-    else:
-        df, meta = to_frame(obs.to_dict("records")), dict(metadata or {})
-    table = pa.Table.from_pandas(df, preserve_index=False)
-    kv = dict(table.schema.metadata or {})
-    kv[SCHEMA_METADATA_KEY.encode()] = json.dumps(load_schema(SCHEMA)).encode()
-    kv[METADATA_KEY.encode()] = json.dumps(_json_safe(meta), allow_nan=False).encode()
-    table = table.replace_schema_metadata(kv)
-    out = Path(path)
-    tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp")
-    try:
-        pq.write_table(table, tmp)
-        os.replace(tmp, out)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-    return out
-
-
-def read_observations(path: str | Path) -> pd.DataFrame:
-    """Read an observations table; its metadata is in ``df.attrs["rigtools"]``.
-
-    ``df.attrs["schema"]`` holds the schema the file was written with.
-    """
-    import pyarrow.parquet as pq
-
-    table = pq.read_table(path)
-    kv = table.schema.metadata or {}
-    df = to_frame(table.to_pandas().to_dict("records"))
-    if METADATA_KEY.encode() in kv:
-        df.attrs["rigtools"] = json.loads(kv[METADATA_KEY.encode()])
-    if SCHEMA_METADATA_KEY.encode() in kv:
-        df.attrs["schema"] = json.loads(kv[SCHEMA_METADATA_KEY.encode()])
-    return df
-
-
-def _json_safe(obj: Any) -> Any:
-    if isinstance(obj, float | np.floating):
-        f = float(obj)
-        return f if math.isfinite(f) else None
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    if isinstance(obj, Path):
-        return str(obj)
-    if isinstance(obj, Mapping):
-        return {str(k): _json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_json_safe(v) for v in obj]
-    if obj is pd.NA or obj is pd.NaT:
-        return None
-    return obj
-
-
-def _cell(v: Any) -> Any:
-    if v is None or v is pd.NA:
-        return None
-    if isinstance(v, float | np.floating):
-        return None if not math.isfinite(float(v)) else float(v)
-    if isinstance(v, np.integer):
-        return int(v)
-    if isinstance(v, np.bool_):
-        return bool(v)
-    return v
-
-
-def validate_observations(df: pd.DataFrame) -> list[tuple[str, str]]:
-    """Check a table against ``data_schemas/observations.schema.json``.
-
-    Returns
-    -------
-    list of (str, str)
-        ``(json_path, message)`` per violation (``$[3].f_n_Hz``: row 3), best first; empty when
-        valid. NaN counts as null.
-    """
-    cols = list(observation_columns())
-    extra = [c for c in df.columns if c not in cols]
-    rows = [{c: _cell(v) for c, v in rec.items()}
-            for rec in df.astype(object).to_dict("records")]
-    errors = iter_errors(rows, SCHEMA)
-    if extra:
-        errors.insert(0, ("$", f"columns not in the schema: {extra}"))
-    return errors

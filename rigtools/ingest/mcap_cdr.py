@@ -37,6 +37,10 @@ gathered with one fancy index. Either way the work in Python is per chunk, not p
 :func:`~rigtools.ingest.mcap_ros2.decode_imu_cdr`, which reads the header stamp and the linear
 acceleration at the offsets the ``frame_id`` length fixes; any other ``ros2msg`` schema goes
 through :class:`Ros2BlockDecoder`, built from the schema text as the general decoder is.
+
+This module holds :class:`Ros2BlockDecoder` and the layout walk; the Imu reader lives in
+:mod:`rigtools.ingest.mcap_cdr_imu` and the byte-span checks and field reads both share in
+:mod:`rigtools.ingest.mcap_cdr_rows` (their public names are re-exported here).
 """
 
 from __future__ import annotations
@@ -48,8 +52,17 @@ from typing import Any, Final, NamedTuple
 
 import numpy as np
 
-from rigtools.ingest.mcap_payloads import PayloadDecodeError
-from rigtools.ingest.mcap_ros2 import decode_imu_cdr
+from rigtools.ingest.mcap_cdr_imu import ImuColumns, decode_imu_cdr_many
+from rigtools.ingest.mcap_cdr_rows import (
+    _PRIMITIVES,
+    _checked_block,
+    _field,
+    _int_field,
+    _Leaf,
+    _Rows,
+    _same_bytes,
+    _strings_decode,
+)
 
 __all__ = [
     "MAX_LAYOUT_NODES",
@@ -64,46 +77,14 @@ __all__ = [
 #: left to the general decoder.
 MAX_LAYOUT_NODES: Final = 4096
 
-#: Payloads up to this long that do not lie at equal distances are gathered whole at once
-#: (longer ones span by span, only the bytes needed).
-_WHOLE_GATHER_BYTES: Final = 64
 #: Nesting (message in message) deeper than this is left to the general decoder.
 _MAX_DEPTH: Final = 64
-#: Primitive types: (NumPy kind + size, size in bytes).
-_PRIMITIVES: Final[dict[str, tuple[str, int]]] = {
-    "bool": ("u1", 1),
-    "byte": ("u1", 1),
-    "char": ("i1", 1),
-    "int8": ("i1", 1),
-    "uint8": ("u1", 1),
-    "int16": ("i2", 2),
-    "uint16": ("u2", 2),
-    "int32": ("i4", 4),
-    "uint32": ("u4", 4),
-    "int64": ("i8", 8),
-    "uint64": ("u8", 8),
-    "float32": ("f4", 4),
-    "float64": ("f8", 8),
-}
 #: Integer types whose values times 1e9 stay within int64 (header stamp fields).
 _SMALL_INTS: Final = frozenset(
     {"int8", "uint8", "byte", "char", "int16", "uint16", "int32", "uint32"}
 )
 #: Primitive arrays the general decoder hands on as ``bytes`` (not numbers as a whole).
 _BYTES_ARRAYS: Final = frozenset({"uint8", "byte"})
-
-
-class _Leaf(NamedTuple):
-    """A primitive field (or primitive array) of a walked message.
-
-    ``offset`` counts from the payload's first byte (the encapsulation header); ``elems`` is
-    the number of elements (1 for a scalar); ``array`` tells an array from a scalar.
-    """
-
-    offset: int
-    type: str
-    elems: int
-    array: bool
 
 
 @dataclass(frozen=True)
@@ -132,21 +113,6 @@ class CdrLayout:
     leaves: dict[tuple[str, ...], _Leaf]
 
 
-class ImuColumns(NamedTuple):
-    """Many ``sensor_msgs/msg/Imu`` messages read at once.
-
-    Attributes
-    ----------
-    stamp_ns : numpy.ndarray
-        int64 header stamps (ns): ``sec * 1e9 + nanosec`` with ``sec`` an int32.
-    accel : numpy.ndarray
-        float64, shape ``(m, 3)``: ``linear_acceleration.x|y|z`` (m/s^2).
-    """
-
-    stamp_ns: np.ndarray
-    accel: np.ndarray
-
-
 class Ros2Columns(NamedTuple):
     """Wanted fields of many ROS 2 messages read at once.
 
@@ -161,163 +127,6 @@ class Ros2Columns(NamedTuple):
 
     stamp_ns: np.ndarray | None
     values: list[np.ndarray]
-
-
-# --------------------------------------------------------------------------------------
-# The same bytes at the same places in every message
-# --------------------------------------------------------------------------------------
-
-
-class _Rows:
-    """The ``m`` payloads of ``n`` bytes at ``s``: spans of bytes at one offset in each.
-
-    A strided view of the buffer (no copy) when the payloads lie at equal distances;
-    otherwise each span asked for is gathered with one fancy index (records of the span's
-    length starting at every byte of the buffer, so the copy is one short run per payload).
-    """
-
-    def __init__(self, buf: Any, s: np.ndarray, n: int) -> None:
-        m = s.shape[0]
-        s0 = int(s[0])
-        step = int(s[1] - s[0]) if m > 1 else n
-        self.m = m
-        self.view: np.ndarray | None = None
-        if m == 1 or (step >= n and bool((s[1:] - s[:-1] == step).all())):
-            self.view = np.ndarray((m, n), np.uint8, buf, s0, (step, 1))
-        self.arr = np.frombuffer(buf, np.uint8)
-        self.s = s
-        self.first = self.arr[s0 : s0 + n]
-        if self.view is None and n <= _WHOLE_GATHER_BYTES:
-            self.view = self.span(0, n)  # small payloads: gathered whole, once
-
-    def span(self, off: int, cnt: int) -> np.ndarray:
-        """Bytes ``off .. off + cnt`` of every payload, shape ``(m, cnt)``."""
-        if self.view is not None:
-            return self.view[:, off : off + cnt]
-        # a record of cnt bytes starting at every byte of the buffer: one copy per payload
-        win = np.ndarray(
-            (self.arr.shape[0] - cnt + 1,), np.dtype((np.void, cnt)), self.arr, 0, (1,)
-        )
-        return win[self.s + off].view(np.uint8).reshape(-1, cnt)
-
-
-def _same_bytes(rows: _Rows, spans: Sequence[tuple[int, int]]) -> bool:
-    """True when every payload has the first one's bytes in each ``(offset, count)`` span."""
-    ref = rows.first
-    for off, cnt in spans:
-        if cnt and not bool((rows.span(off, cnt) == ref[off : off + cnt]).all()):
-            return False
-    return True
-
-
-def _strings_decode(rows: _Rows, strings: Sequence[tuple[int, int]]) -> bool:
-    """True when each string of each payload equals the first's or is all ASCII (so UTF-8)."""
-    ref = rows.first
-    for off, cnt in strings:
-        if not cnt:
-            continue
-        part = rows.span(off, cnt)
-        same = (part == ref[off : off + cnt]).all(axis=1)
-        if not bool(same.all()) and not bool((same | (part < 0x80).all(axis=1)).all()):
-            return False
-    return True
-
-
-def _field(rows: _Rows, leaf: _Leaf, first: int, count: int, e: str) -> np.ndarray:
-    """Elements ``first .. first + count`` of a leaf in every payload, float64 ``(m, count)``."""
-    kind, size = _PRIMITIVES[leaf.type]
-    if count == 0:  # an empty array in every payload: no values (the general path's too)
-        return np.empty((rows.m, 0), np.float64)
-    raw = rows.span(leaf.offset + first * size, count * size)
-    if not raw.flags.c_contiguous:
-        raw = np.ascontiguousarray(raw)
-    vals = raw.view(np.dtype(e + kind))
-    if leaf.type == "bool":
-        return (vals != 0).astype(np.float64)
-    # A float32 signalling NaN becomes a quiet NaN of the same payload, as Python's float()
-    # of the general path makes it, silently (NumPy would warn, or raise under seterr).
-    with np.errstate(invalid="ignore"):
-        return vals.astype(np.float64)
-
-
-def _int_field(rows: _Rows, leaf: _Leaf, e: str) -> np.ndarray:
-    """An integer scalar leaf of every payload, as int64 ``(m,)``."""
-    kind, size = _PRIMITIVES[leaf.type]
-    raw = np.ascontiguousarray(rows.span(leaf.offset, size))
-    return raw.view(np.dtype(e + kind))[:, 0].astype(np.int64)
-
-
-def _checked_block(
-    buf: Any, starts: np.ndarray, ends: np.ndarray
-) -> tuple[Any, np.ndarray, int] | None:
-    """The buffer as bytes, the starts, and the one payload length (None if lengths differ)."""
-    s = np.asarray(starts, np.int64)
-    e = np.asarray(ends, np.int64)
-    if s.shape[0] == 0:
-        return None
-    n = int(e[0] - s[0])
-    if n < 4 or not bool((e - s == n).all()):
-        return None
-    mv = memoryview(buf).cast("B") if not isinstance(buf, memoryview) else buf
-    if mv.format != "B" or mv.ndim != 1:
-        mv = mv.cast("B")
-    return mv, s, n
-
-
-# --------------------------------------------------------------------------------------
-# sensor_msgs/msg/Imu
-# --------------------------------------------------------------------------------------
-
-
-def decode_imu_cdr_many(buf: Any, starts: np.ndarray, ends: np.ndarray) -> ImuColumns | None:
-    """Read header stamp and linear acceleration of many CDR ``sensor_msgs/msg/Imu`` at once.
-
-    Parameters
-    ----------
-    buf : bytes-like
-        A chunk's uncompressed data.
-    starts, ends : numpy.ndarray
-        Byte range of each payload in ``buf`` (int64, shape ``(m,)``).
-
-    Returns
-    -------
-    ImuColumns or None
-        None unless :func:`~rigtools.ingest.mcap_ros2.decode_imu_cdr` reads the first message
-        and every message has its length, its 4 encapsulation header bytes and its
-        ``frame_id`` length word; then the values are exactly those ``decode_imu_cdr`` gives
-        message by message.
-
-    Notes
-    -----
-    ``decode_imu_cdr`` reads ``int32 sec`` and ``uint32 nanosec`` at payload offsets 4 and 8,
-    the ``frame_id`` length ``L`` at 12, and the three float64 of ``linear_acceleration`` at
-    ``4 + ((12 + L + 7) & ~7) + 200``: only ``L`` moves them, and the header's kind byte
-    says the byte order.
-    """
-    blk = _checked_block(buf, starts, ends)
-    if blk is None:
-        return None
-    mv, s, n = blk
-    s0 = int(s[0])
-    try:
-        decode_imu_cdr(mv[s0 : s0 + n])
-    except PayloadDecodeError:
-        return None
-    rows = _Rows(mv, s, n)
-    head = rows.span(0, 16)  # encapsulation header, sec, nanosec, frame_id length
-    ref = rows.first
-    if not bool((head[:, 0:4] == ref[0:4]).all()) or not bool((head[:, 12:16] == ref[12:16]).all()):
-        return None
-    e = "<" if ref[1] == 1 else ">"
-    slen = int(ref[12:16].view(np.dtype(e + "u4"))[0])
-    off = 4 + ((12 + slen + 7) & ~7) + 200
-    stamp = np.ascontiguousarray(head[:, 4:12])
-    sec = stamp[:, 0:4].copy().view(np.dtype(e + "i4"))[:, 0].astype(np.int64)
-    nsec = stamp[:, 4:8].copy().view(np.dtype(e + "u4"))[:, 0].astype(np.int64)
-    sec *= 1_000_000_000
-    sec += nsec
-    acc = _field(rows, _Leaf(off, "float64", 3, True), 0, 3, e)
-    return ImuColumns(sec, acc)
 
 
 # --------------------------------------------------------------------------------------

@@ -54,16 +54,17 @@ as before, counted ``truncated_record``):
   channel is handed on. Without a summary CRC (0) or when it fails, which copy is damaged
   cannot be told and the first definition is kept, as in a stream. A Footer whose offsets point
   outside the file is warned about.
+
+The settling of definitions (the summary first, channels and messages held) is in
+:mod:`rigtools.ingest.mcap_definitions`, the resynchronisation in
+:mod:`rigtools.ingest.mcap_resync`; :class:`ContainerScanner` combines them with the walk.
 """
 
 from __future__ import annotations
 
-import zlib
 from collections.abc import Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
-from typing import Any, BinaryIO, Final, NamedTuple, TypeAlias, TypeVar
-
-import numpy as np
+from typing import Any, BinaryIO, Final, NamedTuple, TypeAlias
 
 from rigtools.errors import RecordingFormatError
 from rigtools.ingest.mcap_decompress import (
@@ -72,9 +73,8 @@ from rigtools.ingest.mcap_decompress import (
     check_chunk_crc,
     check_chunk_size,
 )
+from rigtools.ingest.mcap_definitions import MAX_DEFERRED_BYTES, DefinitionTable
 from rigtools.ingest.mcap_records import (
-    CHUNK_HEAD_MAX_BYTES,
-    FOOTER_AND_MAGIC_BYTES,
     KNOWN_OPS,
     MAGIC,
     MESSAGE_HEADER,
@@ -95,15 +95,11 @@ from rigtools.ingest.mcap_records import (
     ChannelRecord,
     MalformedRecordError,
     SchemaRecord,
-    chunk_content_length,
     message_index_entry_count,
-    parse_channel,
     parse_chunk_header,
-    parse_footer,
-    parse_metadata,
-    parse_schema,
     statistics_message_count,
 )
+from rigtools.ingest.mcap_resync import RecordResync
 from rigtools.ingest.mcap_source import ByteSource
 from rigtools.ingest.mcap_walk import ChunkRecordWalk, MessageBlock, ScannedMessage
 from rigtools.ingest.recording import IngestReport
@@ -122,9 +118,6 @@ __all__ = [
 
 #: Top-level records longer than this (2 GiB) are skipped and counted ``oversized_record``.
 MAX_RECORD_BYTES: Final = 2 << 30
-#: Messages naming a channel not (yet) defined are held, up to this many payload bytes
-#: (64 MiB), until the summary's repeated Channel records may define it.
-MAX_DEFERRED_BYTES: Final = 64 << 20
 #: Messages found directly in the data section (outside chunks) go on in blocks of this many.
 DIRECT_BLOCK_MESSAGES: Final = 4096
 #: Chunk records at least this long (64 KiB) are read and decompressed one chunk ahead in a
@@ -135,12 +128,6 @@ _MAX_WARNINGS_PER_REASON: Final = 5
 _RUN_MIN: Final = 8
 #: How many top-level records the look-ahead for the next chunk steps over at most.
 _LOOKAHEAD_RECORDS: Final = 64
-#: A position is taken for the start of a record when this many records follow each other
-#: from it (known opcode, length within the file), or fewer ending at the Footer or the end.
-_SYNC_RECORDS: Final = 4
-#: The search for the next plausible record reads the file in pieces of this many bytes.
-_SCAN_BYTES: Final = 256 << 10
-_KNOWN_OPS_ARRAY: Final = np.array(sorted(KNOWN_OPS), np.uint8)
 
 #: The outcome of a chunk record's content: its uncompressed records (None when it has none
 #: or is refused), the refusal (reason, detail) if any, and the CRC still to check (None when
@@ -176,8 +163,6 @@ def _chunk_outcome(content: Any, decompressor: ChunkDecompressor, validate_crcs:
     return data, None, crc
 
 
-_Record = TypeVar("_Record", SchemaRecord, ChannelRecord)
-
 
 class RawMessage(NamedTuple):
     """One MCAP Message record with what its channel and schema say about it.
@@ -207,7 +192,7 @@ class RawMessage(NamedTuple):
     data: bytes
 
 
-class ContainerScanner(ChunkRecordWalk):
+class ContainerScanner(DefinitionTable, RecordResync, ChunkRecordWalk):
     """Stream an MCAP file's records from the start; yield messages chunk by chunk.
 
     Parameters
@@ -298,70 +283,6 @@ class ContainerScanner(ChunkRecordWalk):
         self.report.reject("bad_record", 1, where)
         self._warn("bad_record", f"{self.path}: malformed {kind} record at {where}: {exc}")
 
-    # -- records -------------------------------------------------------------------------
-
-    def _checked(self, rec: _Record, kind: str, where: str,
-                 checked: dict[int, _Record]) -> _Record:
-        """``rec``, or its copy in the CRC-checked summary when they differ."""
-        good = checked.get(rec.id)
-        if good is not None and good != rec:
-            self._warn(f"{kind}_damaged", f"{self.path}: {kind} id {rec.id} at {where} differs "
-                       "from its copy in the summary section, whose CRC checks; the summary's "
-                       "copy is used")
-            return good
-        return rec
-
-    def _keep_first(self, table: dict[int, _Record], rec: _Record, kind: str,
-                    where: str) -> None:
-        old = table.setdefault(rec.id, rec)
-        if old != rec:
-            self._warn(f"{kind}_redefined", f"{self.path}: {kind} id {rec.id} redefined at "
-                       f"{where}; the first definition is kept")
-
-    def _schema(self, buf: Any, pos: int, end: int, where: str) -> None:
-        try:
-            rec = parse_schema(buf, pos, end)
-        except MalformedRecordError as exc:
-            self._malformed("Schema", where, exc)
-            return
-        if rec.id != 0:
-            rec = self._checked(rec, "schema", where, self._summary_schemas)
-            self._keep_first(self.schemas, rec, "schema", where)
-            for cid, ch in list(self._unsettled.items()):
-                if ch.schema_id == rec.id:
-                    self.channels.setdefault(cid, self._unsettled.pop(cid))
-
-    def _channel(self, buf: Any, pos: int, end: int, where: str) -> None:
-        try:
-            rec = parse_channel(buf, pos, end)
-        except MalformedRecordError as exc:
-            self._malformed("Channel", where, exc)
-            return
-        rec = self._checked(rec, "channel", where, self._summary_channels)
-        sid = rec.schema_id
-        if sid and sid not in self.schemas and rec.id not in self.channels:
-            if sid in self._summary_schemas:
-                # its Schema record is lost (damaged or missing) before it: the summary's
-                # copy settles the schema before any of the channel's messages goes on
-                self.schemas[sid] = self._summary_schemas[sid]
-                self._warn("schema_from_summary", f"{self.path}: schema id {sid} of channel "
-                           f"{rec.id} ({where}) is not defined before it; its copy in the "
-                           "summary is used")
-            else:
-                # held until its Schema record comes (later in the file, or in the summary):
-                # its messages are held meanwhile, so they are all read with the schema
-                self._unsettled.setdefault(rec.id, rec)
-                return
-        self._keep_first(self.channels, rec, "channel", where)
-
-    def _metadata(self, buf: bytes, where: str) -> None:
-        try:
-            name, meta = parse_metadata(buf)
-        except MalformedRecordError as exc:
-            self._malformed("Metadata", where, exc)
-            return
-        self.metadata.setdefault(name, {}).update(meta)
-
     # -- chunks --------------------------------------------------------------------------
 
     def _chunk(self, outcome: _ChunkOutcome, pos: int) -> MessageBlock | None:
@@ -379,48 +300,6 @@ class ContainerScanner(ChunkRecordWalk):
             return None
         buf = memoryview(data)
         return self._chunk_records(buf, pos, _RUN_MIN)
-
-    # -- messages whose channel is not defined yet ---------------------------------------
-
-    def _defer(self, cid: int, seq: int, lt: int, pt: int, data: Any, where: str) -> None:
-        """Hold a message whose channel is not defined yet.
-
-        Its Channel record may have been in a refused chunk; indexed files repeat every
-        Channel record in the summary.
-        """
-        if self._deferred_bytes + len(data) > MAX_DEFERRED_BYTES:
-            self._unknown_channel(cid, where)
-            return
-        self._deferred_bytes += len(data)
-        self._deferred.append(((cid, seq, lt, pt, memoryview(bytes(data)), -1), where))
-
-    def _release_deferred(self) -> list[ScannedMessage]:
-        for cid, ch in self._unsettled.items():  # their schema never came: read without
-            self.channels.setdefault(cid, ch)
-        self._unsettled = {}
-        out = []
-        for msg, where in self._deferred:
-            if msg[0] in self.channels:
-                out.append(msg)
-            else:
-                self._unknown_channel(msg[0], where)
-        if out:
-            self.report.warn(f"{self.path}: {len(out)} message(s) came before the Channel "
-                             "or Schema record defining their channel (found in the summary or "
-                             "later in the file); they were read last")
-        self._deferred = []
-        self._deferred_bytes = 0
-        return out
-
-    def _unknown_channel(self, cid: int, where: str) -> None:
-        self.report.reject("unknown_channel", 1, where)
-        if cid in self._unsettled:
-            self._warn("unknown_channel", f"{self.path}: message at {where} of channel id "
-                       f"{cid}, whose schema is not defined yet, is beyond the "
-                       f"{MAX_DEFERRED_BYTES} bytes held until it is")
-            return
-        self._warn("unknown_channel", f"{self.path}: message at {where} names channel id {cid}, "
-                   "which no Channel record in the file defines")
 
     # -- the stream ----------------------------------------------------------------------
 
@@ -589,176 +468,6 @@ class ContainerScanner(ChunkRecordWalk):
         if late:
             yield MessageBlock.from_messages("the end of the file (deferred messages)", late)
         self._cross_check()
-
-    # -- a record whose length field lies (seekable streams) -----------------------------
-
-    def _read_summary(self) -> None:
-        """Keep the Schema and Channel records of the summary section, if its CRC checks.
-
-        They then win over a differing (damaged) copy in the data section, before any
-        message is handed on, so a damaged definition never decides how a channel is read.
-        Without a summary CRC (0) nothing is kept: which copy is damaged cannot be told. A
-        Footer whose offsets point outside the file is warned about.
-        """
-        src = self._src
-        total = src.size
-        if total is None or total < len(MAGIC) + FOOTER_AND_MAGIC_BYTES:
-            return
-        fpos = total - FOOTER_AND_MAGIC_BYTES
-        footer = parse_footer(src.peek(fpos, FOOTER_AND_MAGIC_BYTES))
-        if footer is None:
-            return
-        start, offset_start, crc, footer_head = footer
-        for name, at in (("summary start", start), ("summary offset start", offset_start)):
-            if at != 0 and not len(MAGIC) <= at <= fpos:
-                self.report.warn(f"{self.path}: the Footer's {name} ({at}) points outside the "
-                                 f"records of the file (bytes {len(MAGIC)} to {fpos}); the "
-                                 "summary section is not used")
-                return
-        if start == 0 or crc == 0:
-            return
-        summary = src.peek(start, fpos - start)
-        if zlib.crc32(footer_head, zlib.crc32(summary)) != crc:
-            self.report.warn(f"{self.path}: the summary section (byte {start}) does not match "
-                             "the Footer's CRC; its Schema and Channel records are not preferred")
-            return
-        p = 0
-        while len(summary) - p >= RECORD_HEADER_BYTES:
-            op, length = RECORD_HEADER.unpack_from(summary, p)
-            body = p + RECORD_HEADER_BYTES
-            if length > len(summary) - body:
-                break
-            try:
-                if op == OP_SCHEMA:
-                    sch = parse_schema(summary, body, body + length)
-                    self._summary_schemas.setdefault(sch.id, sch)
-                elif op == OP_CHANNEL:
-                    ch = parse_channel(summary, body, body + length)
-                    self._summary_channels.setdefault(ch.id, ch)
-            except MalformedRecordError:
-                pass  # the CRC checks: a writer's fault, met again (and counted) by the walk
-            p = body + length
-
-    def _sync(self, pos: int, op: int, length: int) -> tuple[int, int | None]:
-        """Check a record's length against the records around it; resynchronise if it lies.
-
-        Returns the length to read the record with and None, or the position of the next
-        plausible record (the walk goes on there) when this one is not read. Called when the
-        walk's fast check fails (the record is a Chunk, has an opcode the specification does
-        not define, or its length does not end at the end of the file or at a record header
-        whose length fits). Three cases:
-
-        * A Chunk record whose length does not lead to a plausible record while the length
-          its own fields imply (header + compressed records) does: read with the latter (the
-          chunk's CRC still vouches for its records).
-        * A length past the end of the file, or an unknown opcode whose length does not lead
-          to a plausible record: the walk resumes at the first position after ``pos`` where
-          :data:`_SYNC_RECORDS` plausible records follow each other (counted ``lost_sync``).
-        * Any other record (but a Chunk) whose length leads to no plausible record: if such a
-          chain starts inside its claimed content, its length lied (grew) and the walk
-          resumes there; otherwise the next record is the damaged one and this one is read.
-        """
-        src = self._src
-        total = src.size
-        assert total is not None
-        body = pos + RECORD_HEADER_BYTES
-        fits = length <= total - body
-        if op == OP_CHUNK and not (fits and self._chain(body + length, 2)):
-            implied = chunk_content_length(
-                src.look(body, min(CHUNK_HEAD_MAX_BYTES, total - body)))
-            if implied is not None and implied > total - body and not fits:
-                return length, None  # both lengths end past the file: a cut chunk
-            if implied is not None and implied <= total - body and \
-                    self._chain(body + implied, 2):
-                self._warn("chunk_length", f"{self.path}: the Chunk record at byte {pos} "
-                           f"claims {length} bytes, its own fields {implied}; read with the "
-                           "latter")
-                return implied, None
-        plausible_op = op in KNOWN_OPS or op >= 0x80
-        if not fits or not (plausible_op or self._chain(body + length, 2)):
-            nxt = self._scan(pos + 1, total)
-            if nxt is None:
-                return length, None
-            self._lost_sync(pos, nxt, f"its header (opcode 0x{op:02x}, {length} bytes) does "
-                            f"not fit the file ({total - body} bytes left)")
-            return length, nxt
-        if op != OP_CHUNK and not self._chain(body + length, 1):
-            nxt = self._scan(body, body + length)
-            if nxt is not None:
-                self._lost_sync(pos, nxt, f"its length ({length} bytes) leads to no record, "
-                                f"one starts at byte {nxt}")
-                return length, nxt
-        return length, None
-
-    def _is_footer(self, pos: int, length: int) -> bool:
-        """True when the record at ``pos`` has a Footer's length and the magic follows it."""
-        end = pos + RECORD_HEADER_BYTES + length
-        return length == FOOTER_AND_MAGIC_BYTES - len(MAGIC) - RECORD_HEADER_BYTES and \
-            self._src.look(end, len(MAGIC)) == MAGIC
-
-    def _chain(self, p: int, n: int, known_first: bool = False) -> bool:
-        """True when ``n`` plausible records follow each other from ``p``.
-
-        Plausible: a length within the file, and (for the first record when ``known_first``)
-        an opcode the specification defines; other opcodes are allowed further on, as a
-        writer may add records of its own. Fewer are enough when they end at a Footer or
-        exactly at the end of the file.
-        """
-        src = self._src
-        total = src.size
-        assert total is not None
-        for i in range(n):
-            if p == total:
-                return True
-            if total - p < RECORD_HEADER_BYTES:
-                return False
-            op, length = RECORD_HEADER.unpack(src.look(p, RECORD_HEADER_BYTES))
-            if length > total - p - RECORD_HEADER_BYTES or (
-                    known_first and i == 0 and op not in KNOWN_OPS):
-                return False
-            if op == OP_FOOTER:
-                return self._is_footer(p, length)
-            p += RECORD_HEADER_BYTES + length
-        return True
-
-    def _scan(self, start: int, stop: int) -> int | None:
-        """The first position in ``[start, stop)`` where a chain of plausible records starts.
-
-        A search to the end of the file that finds none is remembered: no later search from
-        beyond its start reads the file again (the walk stays linear in the file size).
-        """
-        src = self._src
-        to_end = stop == src.size
-        if to_end and start >= self._no_sync_from:
-            return None
-        total = src.size
-        assert total is not None
-        p = start
-        while p < stop:
-            n = min(_SCAN_BYTES, stop - p)
-            # candidates: a defined opcode and a length within the file (array operations)
-            buf = src.peek(p, n + RECORD_HEADER_BYTES - 1)
-            m = min(n, len(buf) - RECORD_HEADER_BYTES + 1)
-            if m <= 0:
-                break
-            ops = np.frombuffer(buf, np.uint8, m)
-            lengths = np.ndarray((m,), "<u8", buf, 1, (1,))
-            room = np.arange(total - p - RECORD_HEADER_BYTES, total - p - RECORD_HEADER_BYTES - m,
-                             -1, dtype=np.int64).astype(np.uint64)
-            cand = np.flatnonzero(np.isin(ops, _KNOWN_OPS_ARRAY) & (lengths <= room))
-            for i in cand.tolist():
-                if self._chain(p + i, _SYNC_RECORDS, known_first=True):
-                    return p + i
-            p += n
-        if to_end:
-            self._no_sync_from = min(self._no_sync_from, start)
-        return None
-
-    def _lost_sync(self, pos: int, nxt: int, why: str) -> None:
-        self.report.reject("lost_sync", 1, f"byte {pos}")
-        self._warn("lost_sync", f"{self.path}: the record at byte {pos} is not read: {why}; "
-                   f"bytes {pos} to {nxt} skipped, the walk goes on at the next plausible "
-                   f"record (byte {nxt})")
 
     # -- the chunk read ahead ------------------------------------------------------------
 

@@ -1,0 +1,182 @@
+"""What a window does to a spectrum: :class:`WindowProperties` and :func:`window_properties`.
+
+Equivalent noise bandwidth, scalloping loss, bin correlation and spectral window, cached per
+window and length, and the private ``_window_array`` that turns a window argument into samples.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy import signal as sps
+
+from rigtools.analysis.signal_checks import SignalError, Window
+
+# --------------------------------------------------------------------------------------------
+# window properties
+
+
+@dataclass(frozen=True, eq=False)
+class WindowProperties:
+    r"""What a window does to a spectrum, in bins of ``fs / nperseg``.
+
+    Attributes
+    ----------
+    nperseg : int
+        Window length (samples).
+    enbw_bins : float
+        Equivalent noise bandwidth, :math:`N \sum w^2 / (\sum w)^2` (bins): 1.5 for Hann,
+        3.77 for scipy's flattop.
+    bandwidth_3dB_bins : float
+        Full width of the spectral window :math:`|W(f)|^2` at half its peak (bins): the
+        half-power bandwidth with which a pure tone appears (1.44 for Hann).
+    scalloping_loss : float
+        Worst-case amplitude reading of a sine halfway between two bins, as a fraction lost:
+        :math:`1 - |W(1/2)| / |W(0)|` (0.151 for Hann, 0.0011 for flattop).
+    amplitude_tolerance : float
+        :math:`\max_{0 \le \delta \le 1/2} |1 - |W(\delta)| / |W(0)||`: the largest relative
+        error of a sine's amplitude read at its nearest bin, wherever it falls (a flat top
+        ripples slightly above 1 as well as below).
+    mainlobe_half_width_bins : float
+        Distance from the centre to the first null of :math:`|W|^2` (bins): 2 for Hann.
+    bin_correlation : numpy.ndarray
+        :math:`\rho_q^2`, q = 0, 1, ...: correlation of two PSD estimates q bins apart for a
+        Gaussian signal, :math:`\rho_q = |\sum w_n^2 e^{-2\pi i q n/N}| / \sum w_n^2`
+        (Hann: 1, 0.444, 0.028).
+    kernel : numpy.ndarray
+        The spectral window :math:`|W|^2` sampled at offsets ``kernel_offsets_bins``,
+        normalised to sum 1: the expected Welch estimate is the true PSD convolved with it.
+    kernel_offsets_bins : numpy.ndarray
+        Offsets of ``kernel`` (bins), symmetric about 0 in steps of 1/8 bin.
+    """
+
+    nperseg: int
+    enbw_bins: float
+    bandwidth_3dB_bins: float
+    scalloping_loss: float
+    amplitude_tolerance: float
+    mainlobe_half_width_bins: float
+    bin_correlation: np.ndarray
+    kernel: np.ndarray
+    kernel_offsets_bins: np.ndarray
+    _w: np.ndarray
+
+    def overlap_correlation(self, noverlap: int) -> np.ndarray:
+        r""":math:`\rho(mS)^2` for m = 1, 2, ... while windows S = nperseg - noverlap apart overlap.
+
+        Percival and Walden (1993), Eq. (292b): correlation of two periodograms whose windows
+        are shifted by m S samples.
+        """
+        w = self._w
+        step = self.nperseg - noverlap
+        out = []
+        shift = step
+        denom = float(np.dot(w, w))
+        while shift < self.nperseg:
+            out.append((float(np.dot(w[shift:], w[:-shift])) / denom) ** 2)
+            shift += step
+        return np.asarray(out)
+
+
+_WINDOW_CACHE: dict[tuple[Any, int], WindowProperties] = {}
+_KERNEL_OVERSAMPLING = 8
+
+
+def _window_array(window: Window, nperseg: int) -> np.ndarray:
+    if isinstance(window, np.ndarray):
+        w = np.asarray(window, np.float64)
+        if w.shape != (nperseg,):
+            raise SignalError("window", f"of shape (nperseg,)=({nperseg},)", str(w.shape))
+        return w
+    try:
+        return np.asarray(sps.get_window(window, nperseg), np.float64)
+    except (ValueError, TypeError) as e:
+        raise SignalError("window", "a window scipy.signal.get_window knows", repr(window),
+                          str(e)) from e
+
+
+def window_properties(window: Window, nperseg: int) -> WindowProperties:
+    """Equivalent noise bandwidth, scalloping loss and spectral window of a window.
+
+    Parameters
+    ----------
+    window : str, tuple or numpy.ndarray
+        As for :func:`scipy.signal.get_window` (periodic form), or the samples themselves.
+    nperseg : int
+        Window length (samples).
+
+    Returns
+    -------
+    WindowProperties
+
+    References
+    ----------
+    .. [1] F. J. Harris, "On the use of windows for harmonic analysis with the discrete
+           Fourier transform", Proc. IEEE 66(1), 51-83, 1978 (ENBW, scalloping loss).
+    .. [2] D. B. Percival and A. T. Walden, *Spectral Analysis for Physical Applications*,
+           Cambridge University Press, 1993, Sec. 6.17 (correlation of spectral estimates).
+
+    Examples
+    --------
+    >>> p = window_properties("hann", 4096)
+    >>> round(p.enbw_bins, 3), round(p.scalloping_loss, 3)
+    (1.5, 0.151)
+    """
+    key = (("array", window.tobytes()) if isinstance(window, np.ndarray) else repr(window),
+           int(nperseg))
+    props = _WINDOW_CACHE.get(key)
+    if props is not None:
+        return props
+    w = _window_array(window, nperseg)
+    n = nperseg
+    s1, s2 = float(w.sum()), float(np.dot(w, w))
+    if s1 == 0.0 or s2 == 0.0:
+        raise SignalError("window", "non-zero", "all zeros")
+    enbw = n * s2 / s1**2
+    idx = np.arange(n)
+    offsets_half = np.linspace(0.0, 0.5, 33)[:, None]  # sine between bins: 0 .. 1/2 bin off
+    gain = np.abs(np.exp(-2j * np.pi * offsets_half * idx[None, :] / n) @ w) / abs(s1)
+    half = float(gain[-1])
+    amp_tol = float(np.max(np.abs(1.0 - gain)))
+    ov = _KERNEL_OVERSAMPLING
+    spec = np.abs(np.fft.fft(w, n * ov)) ** 2
+    spec /= spec.sum()
+    rel = spec / spec[0]
+    # 3 dB width and first null on the fine grid (positive side)
+    k = int(np.argmax(rel[: n * ov // 2] < 0.5))
+    x0, x1 = (k - 1) / ov, k / ov
+    y0, y1 = rel[k - 1], rel[k]
+    bw3 = 2 * (x0 + (y0 - 0.5) / (y0 - y1) * (x1 - x0)) if k > 0 else 1.0 / ov
+    d = np.diff(rel[: n * ov // 2])
+    mins = np.flatnonzero((d[:-1] < 0) & (d[1:] >= 0))
+    null = (mins[0] + 1) / ov if mins.size else n / 2
+    # spectral window kernel: keep offsets until 1e-4 of the energy is left out, at most 16 bins
+    centred = np.fft.fftshift(spec)
+    c = n * ov // 2
+    L = ov
+    while L < 16 * ov and 1.0 - centred[c - L: c + L + 1].sum() > 1e-4:
+        L += ov
+    kern = centred[c - L: c + L + 1].copy()
+    kern /= kern.sum()
+    offsets = np.arange(-L, L + 1) / ov
+    # correlation of PSD estimates q bins apart
+    w2 = w * w
+    rho = [1.0]
+    q = 1
+    while q < n // 2:
+        r = abs(np.sum(w2 * np.exp(-2j * np.pi * q * idx / n))) / s2
+        if r**2 < 1e-4:
+            break
+        rho.append(float(r**2))
+        q += 1
+    props = WindowProperties(
+        nperseg=int(n), enbw_bins=float(enbw), bandwidth_3dB_bins=float(bw3),
+        scalloping_loss=float(1.0 - half), amplitude_tolerance=amp_tol,
+        mainlobe_half_width_bins=float(null),
+        bin_correlation=np.asarray(rho), kernel=kern, kernel_offsets_bins=offsets, _w=w)
+    if len(_WINDOW_CACHE) > 64:
+        _WINDOW_CACHE.clear()
+    _WINDOW_CACHE[key] = props
+    return props
