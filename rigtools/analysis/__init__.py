@@ -13,8 +13,9 @@ speed steps; over :mod:`~rigtools.analysis.speed_types`, :mod:`~rigtools.analysi
 :mod:`~rigtools.analysis.speed_steps`), :mod:`~rigtools.analysis.resample` (angular resampling),
 :mod:`~rigtools.analysis.order_spectra` (order spectra, mesh harmonics, displacement),
 :mod:`~rigtools.analysis.campbell` (Campbell data), :mod:`~rigtools.analysis.orders` (Arms per
-step and along a run-up) and :mod:`~rigtools.analysis.observations` (the campaign table; its columns in
-:mod:`~rigtools.analysis.observation_table`, its files in :mod:`~rigtools.analysis.observation_files`).
+step and along a run-up) and :mod:`~rigtools.analysis.observations` (the campaign table; its
+columns in :mod:`~rigtools.analysis.observation_table`, its files in
+:mod:`~rigtools.analysis.observation_files`).
 """
 
 from rigtools.analysis.orders import (
