@@ -8,9 +8,9 @@ module                                   what it holds
 :mod:`~rigtools.ingest.mcap_records`     magic, opcodes, record parsers that check every length
 :mod:`~rigtools.ingest.mcap_source`      sequential reads that never allocate past the data
 :mod:`~rigtools.ingest.mcap_decompress`  chunk size limits, bounded zstd/lz4 decompression, CRC
-:mod:`~rigtools.ingest.mcap_container`   the streaming record walk (:func:`iter_messages`)
-:mod:`~rigtools.ingest.mcap_definitions` Schema/Channel records settled (summary first), held messages
-:mod:`~rigtools.ingest.mcap_resync`      records whose length field lies: resynchronisation
+:mod:`~rigtools.ingest.mcap_container`   the streaming record walk (:func:`iter_messages`);
+                                         ``mcap_definitions`` (Schema/Channel records, summary
+                                         first), ``mcap_resync`` (lying length fields)
 :mod:`~rigtools.ingest.mcap_decoders`    payload decoders chosen by message encoding and schema
 :mod:`~rigtools.ingest.mcap_cdr`         ROS 2 (CDR) messages of one constant layout read a chunk
                                          at a time (per-sample Imu and sensor streams);
