@@ -1,4 +1,9 @@
-"""Shared fixtures: the third-party data folder, skipped cleanly when absent."""
+"""Shared fixtures: the third-party data folder, skipped cleanly when absent.
+
+:data:`REALDATA` is the one definition of where it lives; tests that list its files when they
+are collected (``parametrize``) import it (``from conftest import REALDATA``), every other test
+takes the :func:`realdata` fixture.
+"""
 
 from __future__ import annotations
 

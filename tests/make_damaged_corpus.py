@@ -145,7 +145,7 @@ def _blf_small_containers(path: Path, frames: object) -> Path:
     """python-can's BLFWriter with 4 KiB containers, so one file holds several of them."""
     import can
 
-    from rigtools.ingest.frames import CanFrameBatch
+    from rigtools.ingest.can.frames import CanFrameBatch
 
     assert isinstance(frames, CanFrameBatch)
     with can.BLFWriter(str(path)) as w:

@@ -8,12 +8,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rigtools.analysis.observations import read_observations, validate_observations
-from rigtools.campaign import CampaignError
+from rigtools.campaign import read_observations, validate_observations
 from rigtools.cli import EXIT_UNUSABLE, main
 from rigtools.demo.can_writer import encode_reference_frames, write_can_log
 from rigtools.demo.mcap_writer import write_accel_mcap
 from rigtools.demo.synthetic import synthetic_run
+from rigtools.errors import CampaignError
 
 F_N = 2950.0
 FS = 25_600.0
@@ -123,9 +123,9 @@ def test_spectrum_of_one_channel_of_a_can_log_with_a_plot(files, tmp_path, capsy
 def test_spectrum_plot_uses_no_pyplot(files):
     from matplotlib import _pylab_helpers
 
-    from rigtools.analysis.peaks import analyse_recording
-    from rigtools.cli.spectrum import plot_spectrum
+    from rigtools.analysis import analyse_recording
     from rigtools.ingest import read
+    from rigtools.plots.spectrum import plot_spectrum
 
     fig = plot_spectrum(analyse_recording(read(files["mcap"]), nperseg=2048), "a")
     assert type(fig.canvas).__name__ == "FigureCanvasAgg"

@@ -4,9 +4,13 @@
   FVMS / VVMS / LSTE models built from a :func:`~models.stiffness.mesh_cycle.mesh_cycle`;
 * :mod:`models.dynamics.integrate`: fixed-step RK4 (numba, and a plain-Python reference);
 * :mod:`models.dynamics.sweep`: up/down frequency sweeps with Arms, contact flags and period
-  detection;
+  detection, and the hysteresis (jump) bands where the up and down branches differ;
 * :mod:`models.dynamics.itms`: the ITMS model (seed 003 Eq. 28), one dead-zone spring per tooth
   pair;
+* :mod:`models.dynamics.back_flank`: what the back flanks carry of the drive flanks' profile
+  errors, shared by the SDOF and ITMS models;
+* :mod:`models.dynamics.checks`: the argument checks the modules share (counts of steps and
+  periods, the settle loop's bounds);
 * :mod:`models.dynamics.dimensional`: equivalent mass, omega_n, Lambda <-> Hz <-> rpm, DTE in um;
 * :mod:`models.dynamics.parallel`: :func:`sweep_many`, independent sweeps in parallel (numba
   prange);
@@ -25,6 +29,7 @@
   statements).
 """
 
+from models.dynamics.back_flank import BACK_FLANKS, BackFlank, back_flank_offset
 from models.dynamics.dimensional import (
     DimensionalScaling,
     DimensionalSweep,
@@ -47,19 +52,24 @@ from models.dynamics.integrate import (
 from models.dynamics.itms import ITMSModel, itms_from_mesh_cycle
 from models.dynamics.parallel import SweepJob, sweep_many
 from models.dynamics.sdof import (
-    BACK_FLANKS,
     MODELS,
     DynamicModel,
     PeriodicCurve,
     SDOFModel,
-    back_flank_offset,
     dead_zone,
     dead_zone_potential,
     fvms_error_curve,
     printed_contact_force,
     sdof_from_mesh_cycle,
 )
-from models.dynamics.sweep import SweepResult, steady_state, sweep, sweep_up_down
+from models.dynamics.sweep import (
+    SweepResult,
+    hysteresis_band,
+    hysteresis_bands,
+    steady_state,
+    sweep,
+    sweep_up_down,
+)
 from models.dynamics.tribo import (
     TriboDynamics,
     TriboRecord,
@@ -119,6 +129,7 @@ __all__ = [
     "MAX_STEP_OMEGA",
     "MODELS",
     "POINCARE_POINTS",
+    "BackFlank",
     "Bifurcation",
     "ContactCycle",
     "DimensionalScaling",
@@ -154,6 +165,8 @@ __all__ = [
     "equivalent_mass",
     "fvms_error_curve",
     "highest_frequency_bound",
+    "hysteresis_band",
+    "hysteresis_bands",
     "itms_from_mesh_cycle",
     "load_tribo_case",
     "min_steps_per_period",

@@ -46,6 +46,7 @@ from numpy.typing import ArrayLike
 from models.dynamics.sdof import DynamicModel
 from models.dynamics.sweep import SweepResult
 from models.errors import ModelError
+from models.geometry import kinematics
 from models.geometry.gear_pair import GearPair
 
 __all__ = [
@@ -131,7 +132,8 @@ class DimensionalScaling:
 
     def pinion_rpm(self, lam: ArrayLike) -> np.ndarray:
         """Pinion speed ``60 f_m / z_1`` (rpm)."""
-        return 60.0 * self.mesh_frequency_Hz(lam) / self.pinion_teeth
+        return kinematics.speed_rpm_from_mesh_frequency(self.mesh_frequency_Hz(lam),
+                                                        self.pinion_teeth)
 
     def frequency_ratio_from_Hz(self, f_m_Hz: ArrayLike) -> np.ndarray:  # noqa: N802 (unit)
         """``Lambda`` of a mesh frequency ``f_m`` (Hz)."""
@@ -140,7 +142,7 @@ class DimensionalScaling:
     def frequency_ratio_from_rpm(self, pinion_rpm: ArrayLike) -> np.ndarray:
         """``Lambda`` of a pinion speed (rpm)."""
         return self.frequency_ratio_from_Hz(
-            np.asarray(pinion_rpm, dtype=float) * self.pinion_teeth / 60.0
+            kinematics.mesh_frequency_Hz(pinion_rpm, self.pinion_teeth)
         )
 
     def dte_m(self, x: ArrayLike) -> np.ndarray:

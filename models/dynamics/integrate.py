@@ -70,6 +70,7 @@ from typing import Final
 import numpy as np
 from numba import njit, prange
 
+from models.dynamics.checks import check_settle_args
 from models.dynamics.sdof import DynamicModel
 
 __all__ = [
@@ -692,15 +693,6 @@ class Settled:
         return self.period < 0
 
 
-def _check_settle_args(tol: float, min_periods: int, max_periods: int) -> None:
-    if not tol >= 0:
-        raise ValueError(f"`tol` must be >= 0, was {tol!r}")
-    if not 0 <= min_periods <= max_periods:
-        raise ValueError(
-            f"need 0 <= `min_periods` <= `max_periods`, were {min_periods!r}, {max_periods!r}"
-        )
-
-
 def settle_periodic(
     model: DynamicModel,
     frequency: float,
@@ -720,7 +712,7 @@ def settle_periodic(
     The settled state is within about ``tol / (1 - |mu|)`` of the periodic orbit (``mu`` the
     slowest Floquet multiplier), not ``tol``.
     """
-    _check_settle_args(tol, min_periods, max_periods)
+    check_settle_args(tol, min_periods, max_periods)
     t = model_tables(model, steps_per_period)
     h = _step_size(frequency, t.steps_per_period)
     ring = np.empty((_RING, 2))

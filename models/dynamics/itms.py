@@ -21,7 +21,7 @@ pair's drive-side *gap* is its profile error plus its corner-contact separation 
   (infinite separation) has ``K_j = 0``;
 * back side (``chi_j = 1`` on the theoretical path AE only, no corner contact): the seed gives
   no back-side geometry, so the back-side offset ``e_b`` is a choice (``back_flank``,
-  :func:`~models.dynamics.sdof.back_flank_offset`): ``"unmodified"`` (default) perfect back
+  :func:`~models.dynamics.back_flank.back_flank_offset`): ``"unmodified"`` (default) perfect back
   involutes, ``e_b = 0`` -- the relief of the mesh cycle is ground on the drive flanks;
   ``"mirror"`` the same relief on the back flanks, ``e_b = -e_j`` (a relieved back flank
   touches at ``x < -b - e_j``, later, as a relieved drive flank does); ``"seed"`` Eq. 28
@@ -59,7 +59,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from models.dynamics.sdof import BackFlank, back_flank_offset
+from models.dynamics.back_flank import BackFlank, back_flank_offset
 from models.errors import ModelError
 from models.stiffness.mesh_cycle import MeshCycle
 
@@ -188,7 +188,7 @@ def itms_from_mesh_cycle(
     length_scale_m : float, optional
         ``L`` (m); default ``b``.
     back_flank : {"unmodified", "mirror", "seed"}
-        Back-flank profile (module notes, :func:`~models.dynamics.sdof.back_flank_offset`).
+        Back-flank profile (module notes, :func:`~models.dynamics.back_flank.back_flank_offset`).
     """
     L = backlash_m if length_scale_m is None else length_scale_m
     if not L > 0:

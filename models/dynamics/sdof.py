@@ -51,8 +51,8 @@ Back flanks (``back_flank``): the seed gives no back-side geometry. The cycle's 
 (tip relief) are on the drive flanks; by default the back flanks are unmodified involutes
 (back contact at ``x < -b``); ``"mirror"`` relieves them alike, ``"seed"`` applies the drive-side
 error to the back side as a displacement (seed Eqs. 26, 28 literally), which narrows the back
-gap by the relief (:func:`back_flank_offset`). A user-given error series is a displacement
-excitation and shifts both flanks.
+gap by the relief (:func:`~models.dynamics.back_flank.back_flank_offset`). A user-given error
+series is a displacement excitation and shifts both flanks.
 
 Stiffness and error come either from their Fourier series (``source="fourier"``, seed
 Eq. 25, the cycle's ``*_harmonics``) or from the mesh-cycle curves themselves
@@ -75,16 +75,16 @@ from typing import Literal, Protocol
 import numpy as np
 from numpy.typing import ArrayLike
 
+from models.dynamics.back_flank import BACK_FLANKS, BackFlank
+from models.dynamics.itms import itms_from_mesh_cycle
 from models.errors import ModelError
 from models.stiffness.mesh_cycle import Harmonics, MeshCycle
 
 __all__ = [
-    "BACK_FLANKS",
     "MODELS",
     "DynamicModel",
     "PeriodicCurve",
     "SDOFModel",
-    "back_flank_offset",
     "dead_zone",
     "dead_zone_potential",
     "fvms_error_curve",
@@ -363,32 +363,6 @@ def _error_series(cycle: MeshCycle, source: str, n: int | None) -> Series:
     return Harmonics(float(c[0].real), 2 * np.abs(c[k]), np.angle(c[k]))
 
 
-BackFlank = Literal["unmodified", "mirror", "seed"]
-BACK_FLANKS = ("unmodified", "mirror", "seed")
-
-
-def back_flank_offset(error: np.ndarray, back_flank: str) -> np.ndarray:
-    """Back-side offset ``e_b`` of a drive-flank profile error ``e`` (same unit).
-
-    The back-side contact is ``min(x - e_b + b, 0)``; ``back_flank`` says what the back flanks
-    carry (seed 003 gives no back-side geometry):
-
-    * ``"unmodified"``: perfect involutes, ``e_b = 0`` -- the drive-flank relief and errors of
-      the mesh cycle are not on the back flanks;
-    * ``"mirror"``: the same modification on the back flanks, ``e_b = -e``: material removed
-      widens the gap on both sides, so a relieved back flank touches at ``x < -b - e``;
-    * ``"seed"``: seed Eq. 28 literally (``h_i`` with ``x - e_i + b``), ``e_b = e``: a
-      displacement error that shifts both flanks alike -- for tip relief it *narrows* the back
-      gap, which no relieved flank does.
-    """
-    if back_flank not in BACK_FLANKS:
-        raise ModelError(f"`back_flank` must be one of {BACK_FLANKS}, was {back_flank!r}")
-    e = np.asarray(error, dtype=float)
-    if back_flank == "unmodified":
-        return np.zeros_like(e)
-    return -e if back_flank == "mirror" else e
-
-
 def _negated(h: Series) -> Series:
     if isinstance(h, PeriodicCurve):
         return PeriodicCurve(-np.asarray(h.values, dtype=float))
@@ -438,8 +412,9 @@ def sdof_from_mesh_cycle(
         Fourier series of the cycle (seed Eq. 25) or the sampled curves.
     back_flank : {"unmodified", "mirror", "seed"}
         What the back flanks carry of the cycle's drive-flank profile errors
-        (:func:`back_flank_offset`), for the FVMS model with ``error="cycle"`` and the ITMS
-        model. Default ``"unmodified"``: the relief is on the drive flanks only.
+        (:func:`~models.dynamics.back_flank.back_flank_offset`), for the FVMS model with
+        ``error="cycle"`` and the ITMS model. Default ``"unmodified"``: the relief is on the
+        drive flanks only.
     reference_stiffness : {"model", "fvms"} or float
         ``k_0`` of the scaling (``omega_n = sqrt(k_0 / m)``, ``tilde F``, ``zeta``).
         ``"model"`` (seed Eqs. 27, 30, 31): the model's own mean stiffness -- the mean FVMS,
@@ -459,8 +434,6 @@ def sdof_from_mesh_cycle(
     if back_flank not in BACK_FLANKS:
         raise ModelError(f"`back_flank` must be one of {BACK_FLANKS}, was {back_flank!r}")
     if kind == "itms":
-        from models.dynamics.itms import itms_from_mesh_cycle
-
         return itms_from_mesh_cycle(  # type: ignore[return-value]
             cycle,
             zeta=zeta,

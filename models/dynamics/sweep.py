@@ -37,10 +37,19 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 from numpy.typing import ArrayLike
 
+from models.dynamics.checks import check_settle_args
 from models.dynamics.integrate import POINCARE_POINTS, TableSet, model_tables, sweep_kernel
 from models.dynamics.sdof import DynamicModel
+from models.errors import ModelError
 
-__all__ = ["SweepResult", "steady_state", "sweep", "sweep_up_down"]
+__all__ = [
+    "SweepResult",
+    "hysteresis_band",
+    "hysteresis_bands",
+    "steady_state",
+    "sweep",
+    "sweep_up_down",
+]
 
 
 @dataclass(frozen=True)
@@ -129,12 +138,7 @@ class SweepResult:
 
 
 def _check(tol: float, min_periods: int, max_periods: int, record_periods: int) -> None:
-    if not tol >= 0:
-        raise ValueError(f"`tol` must be >= 0, was {tol!r}")
-    if not 0 <= min_periods <= max_periods:
-        raise ValueError(
-            f"need 0 <= `min_periods` <= `max_periods`, were {min_periods!r}, {max_periods!r}"
-        )
+    check_settle_args(tol, min_periods, max_periods)
     if record_periods < 1:
         raise ValueError(f"`record_periods` must be >= 1, was {record_periods!r}")
 
@@ -290,3 +294,87 @@ def sweep_up_down(
     up = sweep(model, f, **kwargs)
     down = sweep(model, f[::-1], **kwargs)
     return up, down.sorted()
+
+
+def _differ(up: SweepResult, down: SweepResult, rel_tol: float) -> tuple[np.ndarray, np.ndarray]:
+    u, d = up.sorted(), down.sorted()
+    if not np.array_equal(u.frequency, d.frequency):
+        raise ModelError("`up` and `down` must share their frequency grid")
+    diff = np.abs(d.arms - u.arms) > rel_tol * np.maximum(d.arms, u.arms)
+    return u.frequency, diff
+
+
+def hysteresis_bands(
+    up: SweepResult, down: SweepResult, rel_tol: float = 0.1
+) -> list[tuple[float, float]]:
+    """Every run of consecutive grid points where the branches differ, as ``(lo, hi)``.
+
+    The two sweeps are compared point by point in increasing ``Lambda`` (they must share the
+    grid); a point differs where ``|A_down - A_up| > rel_tol * max(A_down, A_up)``. Separate
+    regions (e.g. a super-harmonic near ``Lambda = 0.5`` and the primary resonance) give
+    separate bands, in increasing frequency; a single differing point gives ``(f, f)``.
+
+    Parameters
+    ----------
+    up, down : SweepResult
+        Upward and downward sweeps over the same frequencies (:func:`sweep_up_down`).
+    rel_tol : float
+        Relative difference of ``A_rms`` above which the branches differ (-).
+
+    Returns
+    -------
+    list of tuple of float
+        ``(Lambda_lo, Lambda_hi)`` of each band (-), in increasing frequency.
+
+    Raises
+    ------
+    ModelError
+        If the two sweeps do not share their frequency grid.
+
+    Examples
+    --------
+    Arms of 1 on the way up, 2 at ``Lambda`` 0.9 and 1.0 on the way down:
+
+    >>> def result(arms):
+    ...     n = len(arms)
+    ...     z, b = np.zeros(n), np.zeros(n, dtype=bool)
+    ...     return SweepResult(np.array([0.8, 0.9, 1.0, 1.1]), np.zeros((n, 3)),
+    ...                        np.array(arms), z, b, b, ~b, z, 1.0, np.ones(n),
+    ...                        np.zeros((n, 1, 2)), np.zeros((n, 2)))
+    >>> hysteresis_bands(result([1.0, 1.0, 1.0, 1.0]), result([1.0, 2.0, 2.0, 1.0]))
+    [(0.9, 1.0)]
+    """
+    f, diff = _differ(up, down, rel_tol)
+    idx = np.flatnonzero(diff)
+    if idx.size == 0:
+        return []
+    breaks = np.flatnonzero(np.diff(idx) > 1)
+    starts = np.concatenate(([idx[0]], idx[breaks + 1]))
+    ends = np.concatenate((idx[breaks], [idx[-1]]))
+    return [(float(f[i]), float(f[j])) for i, j in zip(starts, ends, strict=True)]
+
+
+def hysteresis_band(
+    up: SweepResult, down: SweepResult, rel_tol: float = 0.1
+) -> tuple[float, float] | None:
+    """``(Lambda_lo, Lambda_hi)`` spanning *all* points where the branches differ, or None.
+
+    The envelope of :func:`hysteresis_bands` (which keeps separate regions apart; use it to
+    draw or report jump bands).
+
+    Parameters
+    ----------
+    up, down : SweepResult
+        As :func:`hysteresis_bands`.
+    rel_tol : float
+        As :func:`hysteresis_bands`.
+
+    Returns
+    -------
+    tuple of float or None
+        ``(Lambda_lo, Lambda_hi)`` (-), None where the branches never differ.
+    """
+    bands = hysteresis_bands(up, down, rel_tol)
+    if not bands:
+        return None
+    return bands[0][0], bands[-1][1]

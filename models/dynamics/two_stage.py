@@ -72,8 +72,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from models.dynamics.checks import as_count
 from models.dynamics.dimensional import disc_inertia
-from models.dynamics.two_stage_kernels import _run
+from models.dynamics.two_stage_kernels import rk4_system_periods
 from models.errors import ModelError
 from models.stiffness.mesh_cycle import Harmonics
 
@@ -298,17 +299,8 @@ def min_steps_per_period(model: TwoStageModel, frequency: float) -> int:
     return max(4, math.ceil(2.0 * math.pi * w / (frequency * MAX_STEP_OMEGA) - 1e-9))
 
 
-def _count(name: str, value, minimum: int) -> int:
-    """An integer count >= ``minimum``; refuses 2.5 (no silent truncation) and bools."""
-    if isinstance(value, bool) or not float(value).is_integer():
-        raise ModelError(f"`{name}` must be an integer, was {value!r}")
-    if int(value) < minimum:
-        raise ModelError(f"`{name}` must be >= {minimum}, was {value!r}")
-    return int(value)
-
-
 def _setup(model: TwoStageModel, frequency: float, steps_per_period: int):
-    n = _count("steps_per_period", steps_per_period, 4)
+    n = as_count("steps_per_period", steps_per_period, 4)
     if not frequency > 0:
         raise ModelError("need frequency > 0")
     h = 2.0 * math.pi / (frequency * n)
@@ -340,7 +332,7 @@ def two_stage_periods(
     """
     P, T, h = _setup(model, frequency, steps_per_period)
     y = np.asarray(y0, dtype=float).reshape(4)
-    pts, hist = _run(y, P, T, h, _count("n_periods", n_periods, 1), bool(record))
+    pts, hist = rk4_system_periods(y, P, T, h, as_count("n_periods", n_periods, 1), bool(record))
     return pts, (hist if record else None)
 
 
@@ -447,8 +439,8 @@ def two_stage_steady_response(
     (:func:`min_steps_per_period`), else :class:`~models.errors.ModelError`. A response that
     still turns non-finite is returned with ``diverged`` set and NaN peaks.
     """
-    n_trans = _count("transient_periods", transient_periods, 0)
-    n_rec = _count("record_periods", record_periods, 1)
+    n_trans = as_count("transient_periods", transient_periods, 0)
+    n_rec = as_count("record_periods", record_periods, 1)
     if y0 is None:
         y0 = static_state(model)
     start = np.asarray(y0, dtype=float).reshape(4)

@@ -2,18 +2,22 @@
 
 All numba kernels of :mod:`models.dynamics.two_stage` and :mod:`models.dynamics.two_stage_maps`
 live in this one file. numba's on-disk cache (``cache=True``) checks only the source file of
-the function it loads: a map kernel in another file that inlines :func:`_run` would keep
-running the old ``_run`` from its cache after ``_run`` is edited. With every kernel here, any
-edit of any kernel changes this file and invalidates all of them together (the test suite
-checks that no cached kernel calls a compiled function from another file).
+the function it loads: a map kernel in another file that inlines :func:`rk4_system_periods`
+would keep running the old ``rk4_system_periods`` from its cache after it is edited. With every
+kernel here, any edit of any kernel changes this file and invalidates all of them together (the
+test suite checks that no cached kernel calls a compiled function from another file).
 
-* :func:`_run`: fixed-step RK4 of the non-dimensional two-stage equations (module docstring
-  of :mod:`models.dynamics.two_stage`) over ``n_sys`` system periods, with tables of
-  ``kappa`` and ``eps`` at the half steps;
+* :func:`rk4_system_periods`: fixed-step RK4 of the non-dimensional two-stage equations
+  (module docstring of :mod:`models.dynamics.two_stage`) over ``n_sys`` system periods, with
+  tables of ``kappa`` and ``eps`` at the half steps;
 * :func:`_fill_row`: one temperature row of a peak-DTE map (steady response at every
   frequency, state carried along the row), with NaN-safe peaks and a divergence flag;
-* :func:`_map_parallel` / :func:`_map_serial`: all rows, ``prange`` or serial (same row
-  function, identical results).
+* :func:`map_rows_parallel` / :func:`map_rows_serial`: all rows, ``prange`` or serial (same
+  row function, identical results), into the arrays of :func:`allocate_map_outputs`.
+
+The kernels take the non-dimensional arrays that :mod:`models.dynamics.two_stage`
+(``TwoStageModel.params``, ``TwoStageModel.tables``) and
+:func:`models.dynamics.two_stage_maps.prepare_map_grid` build; they check nothing.
 """
 
 from __future__ import annotations
@@ -21,7 +25,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-__all__: list[str] = []
+__all__ = [
+    "allocate_map_outputs",
+    "map_rows_parallel",
+    "map_rows_serial",
+    "rk4_system_periods",
+]
 
 
 @njit(cache=True)
@@ -41,8 +50,32 @@ def _acc(x1, v1, x3, v3, k1, e1, k3, e3, P):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _run(y, P, T, h, n_sys, rec):  # pragma: no cover - compiled
-    """``n_sys`` system periods from ``y``; Poincare points and, if ``rec``, (x1,u1,x3,u3)."""
+def rk4_system_periods(y, P, T, h, n_sys, rec):  # pragma: no cover - compiled
+    """RK4 over ``n_sys`` system periods from the state ``y = (x1, x1', x3, x3')``.
+
+    Parameters
+    ----------
+    y : numpy.ndarray
+        Start state, shape ``(4,)`` (non-dimensional).
+    P : numpy.ndarray
+        Model parameters (``TwoStageModel.params()``), shape ``(9,)``.
+    T : numpy.ndarray
+        ``kappa_1, eps_1, kappa_3, eps_3`` at the ``2 m`` half steps of one system period
+        (``TwoStageModel.tables(N)``), shape ``(4, 2 m)``.
+    h : float
+        RK4 step (non-dimensional time).
+    n_sys : int
+        System periods to run.
+    rec : bool
+        Record ``(x1, u1, x3, u3)`` at every step start.
+
+    Returns
+    -------
+    pts : numpy.ndarray
+        State at the end of each system period (Poincare points), shape ``(n_sys, 4)``.
+    hist : numpy.ndarray
+        The record, shape ``(n_sys m, 4)`` with ``rec``, else ``(0, 4)``.
+    """
     m = T.shape[1] // 2
     x1, v1, x3, v3 = y[0], y[1], y[2], y[3]
     pts = np.empty((n_sys, 4))
@@ -108,10 +141,10 @@ def _fill_row(
         if not carry:
             y = Y0[i, j].copy()
         Tij = np.ascontiguousarray(T[i, j, :, : M[j]])
-        pts, _ = _run(y, P[i, j], Tij, H[j], n_trans, False)
+        pts, _ = rk4_system_periods(y, P[i, j], Tij, H[j], n_trans, False)
         if n_trans > 0:
             y = pts[n_trans - 1].copy()
-        pts2, hist = _run(y, P[i, j], Tij, H[j], n_rec, True)
+        pts2, hist = rk4_system_periods(y, P[i, j], Tij, H[j], n_rec, True)
         b1 = P[i, j, 1]
         b3 = P[i, j, 3]
         ok = _finite4(pts2[n_rec - 1])
@@ -187,9 +220,16 @@ def _fill_row(
 
 
 @njit(parallel=True, cache=True)
-def _map_parallel(
+def map_rows_parallel(
     Y0, P, T, M, H, order, carry, n_trans, n_rec, peak, peak_u, amp, loss, back, div, poinc
 ):  # pragma: no cover - compiled
+    """All rows of a peak-DTE map, rows in parallel (``prange``); results into the outputs.
+
+    ``Y0, P, T, M, H, order`` are ``MapGrid.kernel_args()``
+    (:func:`~models.dynamics.two_stage_maps.prepare_map_grid`); ``carry`` carries the state
+    along a row; ``n_trans`` and ``n_rec`` are the system periods dropped and recorded at each
+    point; the rest are the arrays of :func:`allocate_map_outputs`, filled in place.
+    """
     for i in prange(Y0.shape[0]):
         _fill_row(
             i,
@@ -213,9 +253,10 @@ def _map_parallel(
 
 
 @njit(cache=True)
-def _map_serial(
+def map_rows_serial(
     Y0, P, T, M, H, order, carry, n_trans, n_rec, peak, peak_u, amp, loss, back, div, poinc
 ):  # pragma: no cover - compiled
+    """All rows of a peak-DTE map, one after the other: :func:`map_rows_parallel`'s results."""
     for i in range(Y0.shape[0]):
         _fill_row(
             i,
@@ -238,8 +279,23 @@ def _map_serial(
         )
 
 
-def _alloc(n_t: int, n_f: int, n_rec: int):
-    """Output arrays of the map kernels: peak, peak_u, amp, loss, back, diverged, poincare."""
+def allocate_map_outputs(n_t: int, n_f: int, n_rec: int):
+    """Output arrays of the map kernels, for ``n_t`` temperatures and ``n_f`` frequencies.
+
+    Parameters
+    ----------
+    n_t, n_f : int
+        Rows (temperatures) and columns (frequencies) of the map.
+    n_rec : int
+        Recorded system periods per point.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``peak, peak_u, amp`` (float, ``(n_t, n_f, 2)``), ``loss, back`` (bool,
+        ``(n_t, n_f, 2)``), ``diverged`` (bool, ``(n_t, n_f)``) and ``poincare`` (float,
+        ``(n_t, n_f, n_rec, 2)``), in the order the kernels take them.
+    """
     return (
         np.empty((n_t, n_f, 2)),
         np.empty((n_t, n_f, 2)),

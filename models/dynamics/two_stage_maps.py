@@ -154,19 +154,24 @@ from typing import Literal
 
 import numpy as np
 
+from models.dynamics.checks import as_count
 from models.dynamics.two_stage import (
     TwoStageModel,
-    _count,
     min_steps_per_period,
     natural_frequencies,
     rigid_shaft_model,
     six_state_from_gear_sets,
     static_state,
 )
-from models.dynamics.two_stage_kernels import _alloc, _map_parallel, _map_serial
+from models.dynamics.two_stage_kernels import (
+    allocate_map_outputs,
+    map_rows_parallel,
+    map_rows_serial,
+)
 from models.errors import ModelError
 from models.geometry import GearSet, load_gear_set
 from models.geometry.gear_pair import GearPair
+from models.geometry.kinematics import speed_rpm_from_mesh_frequency
 from models.stiffness.load_distribution import load_share_seed_000
 from models.stiffness.mesh_cycle import Harmonics, mesh_cycle, tabulate_compliance
 from models.stiffness.potential_energy import pair_compliance
@@ -181,12 +186,14 @@ from models.thermal import (
 
 __all__ = [
     "Bifurcation",
+    "MapGrid",
     "PeakDTEMap",
     "ThermalStiffness",
     "TwoStageThermalSetup",
     "bifurcation_over_frequency",
     "bifurcation_over_temperature",
     "peak_dte_map",
+    "prepare_map_grid",
     "thermal_stiffness_component",
     "two_stage_at_temperature",
 ]
@@ -538,7 +545,7 @@ def _models_at_temperature(
     r1, r2, r3 = p1.base_radius(1), p1.base_radius(2), p2.base_radius(1)
     t1 = setup.normal_load_N * r1
     f2 = t1 * (r2 / r1) / r3  # stage-2 normal load T_3 / r_b3, T_3 = T_1 r_2 / r_1
-    n1 = 60.0 * frequencies_Hz / p1.pinion.teeth
+    n1 = speed_rpm_from_mesh_frequency(frequencies_Hz, p1.pinion.teeth)
     n3 = n1 * p1.pinion.teeth / p1.wheel.teeth
     kf, ea = setup.stiffness_fluctuation, setup.error_amplitude_m
     z = np.zeros(1)
@@ -688,7 +695,39 @@ def _as_axis(name: str, v) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class _Grid:
+class MapGrid:
+    """The models at every point of a peak-DTE map, as the map kernels' arrays.
+
+    Built by :func:`prepare_map_grid`; ``n_t`` temperatures, ``n_f`` frequencies, all
+    non-dimensional as :mod:`models.dynamics.two_stage`.
+
+    Attributes
+    ----------
+    Y0 : numpy.ndarray
+        Static state of each point, shape ``(n_t, n_f, 4)``.
+    P : numpy.ndarray
+        Model parameters of each point (``TwoStageModel.params()``), shape ``(n_t, n_f, 9)``.
+    T : numpy.ndarray
+        Half-step tables of each point, padded to the longest column, shape
+        ``(n_t, n_f, 4, 2 q max(steps))``.
+    M : numpy.ndarray of int
+        Half steps per system period of each column, ``2 q steps``, shape ``(n_f,)``.
+    H : numpy.ndarray
+        RK4 step of each column, shape ``(n_f,)``.
+    order : numpy.ndarray of int
+        Order in which a row visits the frequency columns (up or down).
+    lam : numpy.ndarray
+        ``Lambda`` of each column (stage-1 mesh frequency over ``omega_n``), shape ``(n_f,)``.
+    steps : numpy.ndarray of int
+        RK4 steps per stage-1 mesh period of each column, shape ``(n_f,)``.
+    modes : numpy.ndarray
+        Non-dimensional natural frequencies of each point, shape ``(n_t, n_f, 2)``.
+    scales : dict
+        Scales of the first row's models (``"L"`` in m, ``"omega_n"`` in rad/s, ...).
+    mesh_ratio : tuple of int
+        ``(p, q)``; a system period is ``q`` stage-1 mesh periods.
+    """
+
     Y0: np.ndarray
     P: np.ndarray
     T: np.ndarray
@@ -706,13 +745,30 @@ class _Grid:
         return self.Y0, self.P, self.T, self.M, self.H, self.order
 
 
-def _prepare_grid(
+def prepare_map_grid(
     setup: TwoStageThermalSetup, f: np.ndarray, t: np.ndarray, n: int, direction: str
-) -> _Grid:
+) -> MapGrid:
     """Models at every grid point, as the kernels' arrays (static states, params, tables).
 
     Column ``j`` runs ``N_j = max(n, min_steps_per_period)`` RK4 steps per stage-1 mesh
     period (the largest over the temperatures), its tables padded to the longest column.
+
+    Parameters
+    ----------
+    setup : TwoStageThermalSetup
+        Model inputs.
+    f : numpy.ndarray
+        Stage-1 mesh frequencies (Hz), shape ``(n_f,)``, > 0.
+    t : numpy.ndarray
+        Bulk temperatures (deg C), shape ``(n_t,)``.
+    n : int
+        Least RK4 steps per stage-1 mesh period.
+    direction : {"up", "down"}
+        Order in which a row visits the frequencies.
+
+    Returns
+    -------
+    MapGrid
     """
     rows = [_models_at_temperature(setup, float(tc), f) for tc in t]
     m0, sc0, _ = rows[0][0]
@@ -735,7 +791,7 @@ def _prepare_grid(
     order = np.arange(f.size) if direction == "up" else np.arange(f.size)[::-1].copy()
     M = (2 * q * steps).astype(np.int64)
     H = 2.0 * math.pi / (lam * steps)
-    return _Grid(Y0, P, T, M, H, order, lam, steps, modes, sc0, (int(p), int(q)))
+    return MapGrid(Y0, P, T, M, H, order, lam, steps, modes, sc0, (int(p), int(q)))
 
 
 def peak_dte_map(
@@ -786,12 +842,12 @@ def peak_dte_map(
         raise ModelError("`frequencies_Hz` must be > 0")
     if direction not in ("up", "down"):
         raise ModelError(f"`direction` must be 'up' or 'down', was {direction!r}")
-    n = _count("steps_per_period", steps_per_period, 4)
-    n_rec = _count("record_periods", record_periods, 1)
-    n_trans = _count("transient_periods", transient_periods, 0)
-    grid = _prepare_grid(s, f, t, n, direction)
-    out = _alloc(t.size, f.size, n_rec)
-    kernel: Callable[..., None] = _map_parallel if parallel else _map_serial
+    n = as_count("steps_per_period", steps_per_period, 4)
+    n_rec = as_count("record_periods", record_periods, 1)
+    n_trans = as_count("transient_periods", transient_periods, 0)
+    grid = prepare_map_grid(s, f, t, n, direction)
+    out = allocate_map_outputs(t.size, f.size, n_rec)
+    kernel: Callable[..., None] = map_rows_parallel if parallel else map_rows_serial
     kernel(*grid.kernel_args(), bool(continuation), n_trans, n_rec, *out)
     p, q = grid.mesh_ratio
     sc0 = grid.scales

@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike
 
 from models.errors import GeometryError
 from models.geometry.involute import inv, inv_inverse
+from models.geometry.kinematics import mesh_frequency_Hz
 
 __all__ = ["STEEL", "Gear", "GearPair", "Material"]
 
@@ -360,12 +361,12 @@ class GearPair:
         return pitch_w - total
 
     def mesh_period(self, pinion_speed_rpm: float) -> float:
-        """Mesh period ``60 / (z1 n1)`` (s)."""
-        return 60.0 / (self.pinion.teeth * pinion_speed_rpm)
+        """Mesh period ``60 / (z1 n1)`` (s), the reciprocal of :meth:`mesh_frequency`."""
+        return 1.0 / self.mesh_frequency(pinion_speed_rpm)
 
     def mesh_frequency(self, pinion_speed_rpm: float) -> float:
-        """Mesh frequency ``z1 n1 / 60`` (Hz)."""
-        return self.pinion.teeth * pinion_speed_rpm / 60.0
+        """Mesh frequency ``z1 n1 / 60`` (Hz), by :func:`models.geometry.mesh_frequency_Hz`."""
+        return float(mesh_frequency_Hz(pinion_speed_rpm, self.pinion.teeth))
 
 
     # --- positions on the line of action -----------------------------------------------

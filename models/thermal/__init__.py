@@ -12,7 +12,10 @@ that keeps similarity; seed 001's temperature stiffness), ``thermoelastic`` (see
 thermoelastic pair stiffness with backlash, the critical compensation gap ``c* = (1 - chi)
 (Delta_1 + Delta_2)``, Table 5's regimes, the jammed state; the thermal closure is an input),
 ``natural_frequency`` (mesh natural frequency from the cycle-mean thermoelastic stiffness and the
-gears' equivalent mass, prepared once and vectorised over runs and parameter sets).
+gears' equivalent mass, prepared once and vectorised over runs and parameter sets),
+``torque_sweep`` (seed 000's hot-state thermal closure and the mean stiffness and natural
+frequency swept over torque and backlash at it, with the jammed torque ranges; drawn by
+:mod:`rigtools.plots.thermal`), ``checks`` (the argument checks the modules share).
 """
 
 from models.thermal.expansion import (
@@ -52,6 +55,7 @@ from models.thermal.natural_frequency import (
 )
 from models.thermal.reference_state import HOUSING_MODELS, HousingModel, ThermalReference
 from models.thermal.thermoelastic import (
+    CRITICAL_GAP_ATOL_M,
     FALLS,
     JAMMED_STAND_IN,
     RISES,
@@ -70,10 +74,22 @@ from models.thermal.thermoelastic import (
     thermoelastic_pair_stiffness,
     thermoelastic_stiffness,
 )
+from models.thermal.torque_sweep import (
+    TABLE_6_TORQUES_NM,
+    JamSpan,
+    ThermalClosure,
+    ThermalSweep,
+    default_backlash,
+    jammed_torque_spans,
+    seed_000_hot_state_closure,
+    thermal_sweep,
+    torque_grid,
+)
 
 __all__ = [
     "BLOK_COEFFICIENT_HERTZIAN",
     "BLOK_COEFFICIENT_SEED_001",
+    "CRITICAL_GAP_ATOL_M",
     "DEFAULT_BORE_FRACTION",
     "ETA_SEED_001",
     "FALLS",
@@ -84,6 +100,7 @@ __all__ = [
     "JAMMED_STAND_IN",
     "RISES",
     "SEED_000_CHI",
+    "TABLE_6_TORQUES_NM",
     "UNCHANGED",
     "CriticalGapSearch",
     "DoubleFlankContact",
@@ -91,17 +108,21 @@ __all__ = [
     "FlashTemperature",
     "GearTemperature",
     "HousingModel",
+    "JamSpan",
     "JammedModel",
     "NaturalFrequency",
     "NaturalFrequencyModel",
     "TemperatureStiffness",
+    "ThermalClosure",
     "ThermalDeformation",
     "ThermalJamError",
     "ThermalReference",
+    "ThermalSweep",
     "ThermoelasticStiffness",
     "blok_flash_temperature",
     "critical_gap",
     "critical_gap_numerical",
+    "default_backlash",
     "disc_mean_temperature_rise",
     "disc_rim_expansion",
     "double_flank_contact",
@@ -111,14 +132,18 @@ __all__ = [
     "frictional_heat_flux",
     "gear_inertia",
     "hertz_half_width",
+    "jammed_torque_spans",
     "mesh_natural_frequency",
     "mesh_natural_frequency_scalar",
     "prepare_natural_frequency",
+    "seed_000_hot_state_closure",
     "stiffness_regime",
     "temperature_stiffness",
     "thermal_deformation",
     "thermal_effusivity",
+    "thermal_sweep",
     "thermoelastic_mesh_stiffness",
     "thermoelastic_pair_stiffness",
     "thermoelastic_stiffness",
+    "torque_grid",
 ]

@@ -125,6 +125,7 @@ from numpy.typing import ArrayLike
 from models.errors import GeometryError, ModelError
 from models.geometry.gear_pair import GearPair
 from models.geometry.involute import inv
+from models.thermal.checks import as_finite
 from models.thermal.flash import FlashTemperature
 from models.thermal.reference_state import ThermalReference
 
@@ -143,13 +144,6 @@ __all__ = [
 #: Bore diameter as a fraction of the reference diameter when a gear states none (as in
 #: :mod:`models.stiffness.potential_energy`).
 DEFAULT_BORE_FRACTION = 0.3
-
-
-def _array(name: str, value: ArrayLike) -> np.ndarray:
-    a = np.asarray(value, dtype=float)
-    if not np.all(np.isfinite(a)):
-        raise ModelError(f"`{name}` must be finite, was {value!r}")
-    return a
 
 
 @dataclass(frozen=True, eq=False)
@@ -210,8 +204,8 @@ def disc_mean_temperature_rise(
     if not (math.isfinite(a) and math.isfinite(b) and 0 < a < b):
         raise ModelError(f"radii must satisfy 0 < `bore_radius_m` < `outer_radius_m`, were "
                          f"{bore_radius_m!r} and {outer_radius_m!r}")
-    tn = _array("bore_rise_K", bore_rise_K)
-    tb = _array("outer_rise_K", outer_rise_K)
+    tn = as_finite("bore_rise_K", bore_rise_K)
+    tb = as_finite("outer_rise_K", outer_rise_K)
     weight = b * b / (b * b - a * a) - 1.0 / (2.0 * math.log(b / a))
     return tn + (tb - tn) * weight
 
@@ -380,9 +374,9 @@ def _flank(pair: GearPair, gear: int, s: np.ndarray, temp: GearTemperature,
     phi = (math.pi / (2 * g.teeth) + 2 * g.profile_shift * math.tan(a0) / g.teeth
            + float(inv(a0)) - (np.tan(alpha_k) - alpha_k))
     omega = alpha_k - phi
-    theta_n = _array("bore_C", temp.bore_C) - t_ref
-    theta_b = _array("base_circle_C", temp.base_circle_C) - t_ref
-    local = _array("local_rise_K", temp.local_rise_K) + extra_rise
+    theta_n = as_finite("bore_C", temp.bore_C) - t_ref
+    theta_b = as_finite("base_circle_C", temp.base_circle_C) - t_ref
+    local = as_finite("local_rise_K", temp.local_rise_K) + extra_rise
     theta_bar = disc_mean_temperature_rise(r_n, r_b, theta_n, theta_b)
     theta_t = theta_b + local
     theta_bar, theta_t, r_k, phi, omega, rho = np.broadcast_arrays(theta_bar, theta_t, r_k, phi,
@@ -477,7 +471,7 @@ def thermal_deformation(
     >>> round(float(d.total_m[0]) * 1e6, 3), round(1.15e-5 * 70 * g.line_of_action_length * 1e6, 3)
     (28.115, 28.115)
     """
-    s = _array("s_m", s_m)
+    s = as_finite("s_m", s_m)
     length = pair.line_of_action_length
     if np.any(s <= 0) or np.any(s >= length):
         raise ModelError(f"`s_m` must lie strictly between T1 (0) and T2 ({length:.6g} m), "
@@ -497,7 +491,7 @@ def thermal_deformation(
         if flash is None:
             raise ModelError("`flash` is required when `reference.flash_counts_as_local_rise` "
                              "is True, was None")
-        extra = _array("flash.flash_K", flash.flash_K)
+        extra = as_finite("flash.flash_K", flash.flash_K)
     t_ref = reference.reference_temperature_C
     wheel_t = temperature if wheel_temperature is None else wheel_temperature
     try:
@@ -621,12 +615,12 @@ def temperature_stiffness(
     >>> float(cold.pair_N_m), bool(cold.undefined)
     (nan, True)
     """
-    f = _array("load_N", load_N)
+    f = as_finite("load_N", load_N)
     b = float(face_width_m)
     if not (math.isfinite(b) and b > 0):
         raise ModelError(f"`face_width_m` must be a finite number > 0, was {face_width_m!r}")
-    s1 = _array("sigma_pinion_m", sigma_pinion_m)
-    s2 = _array("sigma_wheel_m", sigma_wheel_m)
+    s1 = as_finite("sigma_pinion_m", sigma_pinion_m)
+    s2 = as_finite("sigma_wheel_m", sigma_wheel_m)
     for name, a in (("load_N", f), ("sigma_pinion_m", s1), ("sigma_wheel_m", s2)):
         if np.any(a < 0):
             raise ModelError(f"`{name}` must be >= 0, was {float(a.min()):.6g} (minimum); a "
@@ -639,7 +633,7 @@ def temperature_stiffness(
     k_pair = np.divide(f, b * (s1 + s2), out=nan.copy(), where=~undefined)
     mesh = None
     if mesh_stiffness_N_m is not None:
-        kt = _array("mesh_stiffness_N_m", mesh_stiffness_N_m)
+        kt = as_finite("mesh_stiffness_N_m", mesh_stiffness_N_m)
         if np.any(kt < 0):
             raise ModelError(f"`mesh_stiffness_N_m` must be >= 0, was {float(kt.min()):.6g}")
         mesh = kt + b * k_pair

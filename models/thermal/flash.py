@@ -99,6 +99,7 @@ from models.errors import ModelError
 from models.geometry.gear_pair import GearPair
 from models.stiffness.hertz import contact_modulus
 from models.stiffness.load_distribution import load_share_seed_000, normal_load_from_torque
+from models.thermal.checks import as_finite
 
 __all__ = [
     "BLOK_COEFFICIENT_HERTZIAN",
@@ -128,22 +129,15 @@ HEAT_CONVERSION_SEED_000 = 0.9
 FRICTION_SEED_000 = 0.132
 
 
-def _array(name: str, value: ArrayLike) -> np.ndarray:
-    a = np.asarray(value, dtype=float)
-    if not np.all(np.isfinite(a)):
-        raise ModelError(f"`{name}` must be finite, was {value!r}")
-    return a
-
-
 def _nonnegative(name: str, value: ArrayLike) -> np.ndarray:
-    a = _array(name, value)
+    a = as_finite(name, value)
     if np.any(a < 0):
         raise ModelError(f"`{name}` must be >= 0, was {float(a.min()):.6g} (minimum)")
     return a
 
 
 def _positive(name: str, value: ArrayLike) -> np.ndarray:
-    a = _array(name, value)
+    a = as_finite(name, value)
     if np.any(a <= 0):
         raise ModelError(f"`{name}` must be > 0, was {float(a.min()):.6g} (minimum)")
     return a
@@ -319,9 +313,9 @@ def frictional_heat_flux(
     180.0
     """
     p = _nonnegative("mean_pressure_Pa", mean_pressure_Pa)
-    v = _array("sliding_velocity_m_s", sliding_velocity_m_s)
+    v = as_finite("sliding_velocity_m_s", sliding_velocity_m_s)
     f = _nonnegative("friction_coefficient", friction_coefficient)
-    g = float(_array("heat_conversion", heat_conversion))
+    g = float(as_finite("heat_conversion", heat_conversion))
     if not 0.0 <= g <= 1.0:
         raise ModelError(f"`heat_conversion` must lie in [0, 1], was {heat_conversion!r}")
     return g * p * f * np.abs(v)
@@ -455,14 +449,14 @@ def flash_temperature(
     >>> [round(float(t), 1) for t in ft.contact_temperature_C]  # deg C
     [272.4, 90.0, 225.5]
     """
-    s = _array("s_m", s_m)
+    s = as_finite("s_m", s_m)
     length = pair.line_of_action_length
     if np.any(s <= 0) or np.any(s >= length):
         raise ModelError(f"`s_m` must lie strictly between T1 (0) and T2 ({length:.6g} m), "
                          f"was in [{float(s.min()):.6g}, {float(s.max()):.6g}] m")
     torque = _nonnegative("torque_Nm", torque_Nm)
     speed = _positive("pinion_speed_rpm", pinion_speed_rpm)
-    bulk = _array("bulk_temperature_C", bulk_temperature_C)
+    bulk = as_finite("bulk_temperature_C", bulk_temperature_C)
     if isinstance(load_share, str):
         if load_share != "seed-000":
             raise ModelError(f"`load_share` must be 'seed-000' or numbers, was {load_share!r}")

@@ -126,13 +126,10 @@ from models.errors import ModelError
 from models.geometry.gear_pair import GearPair
 from models.stiffness.ishikawa import HertzOption, tooth_pair_stiffness
 from models.stiffness.load_distribution import load_share_seed_000
+from models.thermal.checks import as_backlash, as_chi, as_closure, as_positive
 from models.thermal.thermoelastic import (
     JAMMED_STAND_IN,
     SEED_000_CHI,
-    _as_backlash,
-    _as_chi,
-    _as_closure,
-    _as_positive,
     thermoelastic_pair_stiffness,
 )
 
@@ -231,7 +228,7 @@ def equivalent_mass(inertia_pinion_kg_m2: float, inertia_wheel_kg_m2: float,
     >>> round(equivalent_mass(2e-3, 2e-3, 0.05, 0.05), 12)
     0.4
     """
-    j1, j2, r1, r2 = (float(_as_positive(n, v)) for n, v in (
+    j1, j2, r1, r2 = (float(as_positive(n, v)) for n, v in (
         ("inertia_pinion_kg_m2", inertia_pinion_kg_m2),
         ("inertia_wheel_kg_m2", inertia_wheel_kg_m2),
         ("base_radius_pinion_m", base_radius_pinion_m),
@@ -393,7 +390,7 @@ def prepare_natural_frequency(
         if torque_Nm is None:
             raise ModelError("`torque_Nm` (the runs' torques) is required with "
                              "include_hertz='weber' (k_EP depends on the load), was None")
-        t_runs = _as_positive("torque_Nm", torque_Nm).astype(float)
+        t_runs = as_positive("torque_Nm", torque_Nm).astype(float)
         if t_runs.ndim != 1:
             raise ModelError(f"`torque_Nm` must be 1-D (one per run), had shape {t_runs.shape}")
         load = (t_runs / pair.base_radius(1))[:, None] * share
@@ -412,7 +409,7 @@ def prepare_natural_frequency(
     else:
         if len(inertia_kg_m2) != 2:
             raise ModelError(f"`inertia_kg_m2` must be a pair (J_1, J_2), was {inertia_kg_m2!r}")
-        j1, j2 = (float(_as_positive("inertia_kg_m2", v)) for v in inertia_kg_m2)
+        j1, j2 = (float(as_positive("inertia_kg_m2", v)) for v in inertia_kg_m2)
         basis = "given"
     rb1, rb2 = pair.base_radius(1), pair.base_radius(2)
     return NaturalFrequencyModel(
@@ -523,10 +520,10 @@ def mesh_natural_frequency(
     """
     if jammed_model not in JAMMED_MODELS:
         raise ModelError(f"`jammed_model` must be one of {JAMMED_MODELS}, was {jammed_model!r}")
-    t = _as_positive("torque_Nm", torque_Nm)
-    d = _as_closure(thermal_closure_m)
-    c = _as_backlash(backlash_m)
-    x = _as_chi(chi)
+    t = as_positive("torque_Nm", torque_Nm)
+    d = as_closure(thermal_closure_m)
+    c = as_backlash(backlash_m)
+    x = as_chi(chi)
     big_f = t / model.base_radius_pinion_m
     q, a = model._q, model._a
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):

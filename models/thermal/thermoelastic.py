@@ -195,8 +195,10 @@ from models.stiffness.load_distribution import (
     load_share_seed_000,
     normal_load_from_torque,
 )
+from models.thermal.checks import as_backlash, as_chi, as_closure, as_nonnegative, as_positive
 
 __all__ = [
+    "CRITICAL_GAP_ATOL_M",
     "FALLS",
     "JAMMED_STAND_IN",
     "RISES",
@@ -220,6 +222,9 @@ __all__ = [
 SEED_000_CHI: Final[float] = 0.0285
 #: The value put into a stiffness where the gears are jammed (see the module notes).
 JAMMED_STAND_IN: Final[float] = math.nan
+#: ``|c - c*|`` up to which a backlash counts as the critical gap (m): 1 pm, round-off of
+#: ``c*`` computed from a closure in metres.
+CRITICAL_GAP_ATOL_M: Final[float] = 1e-12
 #: Regime codes of :func:`stiffness_regime` (Table 5): stiffness falls with load ...
 FALLS: Final[int] = -1
 #: ... is unchanged (c = c*) ...
@@ -279,42 +284,6 @@ class ThermalJamError(ModelError):
 
 
 # --- validation at the boundary ------------------------------------------------------------
-def _first_bad(x: np.ndarray, bad: np.ndarray) -> float:
-    return float(np.broadcast_to(x, bad.shape)[bad].flat[0])
-
-
-def _as_positive(name: str, value: ArrayLike) -> np.ndarray:
-    x = np.asarray(value, dtype=float)
-    bad = ~(np.isfinite(x) & (x > 0))
-    if np.any(bad):
-        raise ModelError(f"`{name}` must be finite and > 0, was {_first_bad(x, bad)!r}")
-    return x
-
-
-def _as_backlash(value: ArrayLike, name: str = "backlash_m") -> np.ndarray:
-    x = np.asarray(value, dtype=float)
-    bad = ~(np.isfinite(x) & (x >= 0))
-    if np.any(bad):
-        raise ModelError(f"`{name}` must be finite and >= 0 (m), was {_first_bad(x, bad)!r}")
-    return x
-
-
-def _as_closure(value: ArrayLike, name: str = "thermal_closure_m") -> np.ndarray:
-    x = np.asarray(value, dtype=float)
-    bad = ~np.isfinite(x)
-    if np.any(bad):
-        raise ModelError(f"`{name}` must be finite (m), was {_first_bad(x, bad)!r}")
-    return x
-
-
-def _as_chi(value: ArrayLike) -> np.ndarray:
-    x = np.asarray(value, dtype=float)
-    bad = ~(np.isfinite(x) & (x >= 0) & (x <= 1))
-    if np.any(bad):
-        raise ModelError(f"`chi` must lie in [0, 1], was {_first_bad(x, bad)!r}")
-    return x
-
-
 def _as_share(value: float) -> float:
     v = float(value)
     if not 0.0 <= v <= 1.0:
@@ -355,7 +324,7 @@ def critical_gap(thermal_closure_m: ArrayLike, chi: ArrayLike = SEED_000_CHI) ->
     >>> round(float(critical_gap(10.2934e-6)) * 1e6, 3)   # um, chi = 0.0285
     10.0
     """
-    return (1.0 - _as_chi(chi)) * _as_closure(thermal_closure_m)
+    return (1.0 - as_chi(chi)) * as_closure(thermal_closure_m)
 
 
 def elastic_backlash_stiffness(normal_load_N: ArrayLike, k_EP_N_per_m: ArrayLike,
@@ -385,9 +354,9 @@ def elastic_backlash_stiffness(normal_load_N: ArrayLike, k_EP_N_per_m: ArrayLike
     >>> round(float(elastic_backlash_stiffness(1e3, 4e8, 2.5e-6)) / 4e8, 3)
     0.5
     """
-    f = _as_positive("normal_load_N", normal_load_N)
-    k = _as_positive("k_EP_N_per_m", k_EP_N_per_m)
-    c = _as_backlash(backlash_m)
+    f = as_positive("normal_load_N", normal_load_N)
+    k = as_positive("k_EP_N_per_m", k_EP_N_per_m)
+    c = as_backlash(backlash_m)
     return np.asarray(f * k / (f + c * k))
 
 
@@ -438,11 +407,11 @@ def thermoelastic_pair_stiffness(
     >>> [round(thermoelastic_pair_stiffness(f, 4e8, d, c, chi) / 4e8, 12) for f in (1e3, 1e4)]
     [1.0, 1.0]
     """
-    f = float(_as_positive("normal_load_N", _scalar("normal_load_N", normal_load_N)))
-    k = float(_as_positive("k_EP_N_per_m", _scalar("k_EP_N_per_m", k_EP_N_per_m)))
-    d = float(_as_closure(_scalar("thermal_closure_m", thermal_closure_m)))
-    c = float(_as_backlash(_scalar("backlash_m", backlash_m)))
-    x = float(_as_chi(_scalar("chi", chi)))
+    f = float(as_positive("normal_load_N", _scalar("normal_load_N", normal_load_N)))
+    k = float(as_positive("k_EP_N_per_m", _scalar("k_EP_N_per_m", k_EP_N_per_m)))
+    d = float(as_closure(_scalar("thermal_closure_m", thermal_closure_m)))
+    c = float(as_backlash(_scalar("backlash_m", backlash_m)))
+    x = float(as_chi(_scalar("chi", chi)))
     c_star = (1.0 - x) * d
     den = f - (1.0 - x) * k * d + c * k
     if not den > 0.0:
@@ -591,12 +560,12 @@ def thermoelastic_stiffness(
     >>> r.jammed.tolist(), bool(r.k_N_per_m[1] > 4e8)
     ([True, False], True)
     """
-    f = _as_positive("normal_load_N", normal_load_N)
-    k1 = _as_positive("k_E1_N_per_m", k_E1_N_per_m)
-    k2 = _as_positive("k_E2_N_per_m", k_E2_N_per_m)
-    d = _as_closure(thermal_closure_m)
-    c = _as_backlash(backlash_m)
-    x = _as_chi(chi)
+    f = as_positive("normal_load_N", normal_load_N)
+    k1 = as_positive("k_E1_N_per_m", k_E1_N_per_m)
+    k2 = as_positive("k_E2_N_per_m", k_E2_N_per_m)
+    d = as_closure(thermal_closure_m)
+    c = as_backlash(backlash_m)
+    x = as_chi(chi)
     share = _as_share(pinion_backlash_share)
     f, k1, k2, d, c, x = np.broadcast_arrays(f, k1, k2, d, c, x)
     kp = k1 * k2 / (k1 + k2)
@@ -683,7 +652,7 @@ def thermoelastic_mesh_stiffness(
     s = contact_path_positions(pair) if s_m is None else np.asarray(s_m, dtype=float)
     if s.ndim != 1:
         raise ModelError(f"`s_m` must be 1-D, had shape {s.shape}")
-    t = _as_positive("torque_Nm", torque_Nm)
+    t = as_positive("torque_Nm", torque_Nm)
     share_R = load_share_seed_000(pair, s)
     if np.any(share_R <= 0):
         raise ModelError("`s_m` must lie on the path of contact (load share R > 0)")
@@ -691,7 +660,7 @@ def thermoelastic_mesh_stiffness(
     weber = include_hertz == "weber"
     ks = tooth_pair_stiffness(pair, s, load_N=f if weber else 1.0, include_hertz=include_hertz,
                               shear_coefficient=shear_coefficient, anchor=anchor)
-    d = _as_closure(thermal_closure_m)
+    d = as_closure(thermal_closure_m)
     if closure_along_path:
         if d.ndim == 0 or d.shape[-1] != s.size:
             raise ModelError(f"`thermal_closure_m` must have the {s.size} positions on its last "
@@ -711,7 +680,7 @@ def stiffness_regime(
     thermal_closure_m: ArrayLike,
     chi: ArrayLike = SEED_000_CHI,
     *,
-    atol_m: float = 1e-12,
+    atol_m: float = CRITICAL_GAP_ATOL_M,
 ) -> np.ndarray:
     r"""Table 5's regime: how the thermoelastic stiffness changes as the load grows.
 
@@ -745,7 +714,7 @@ def stiffness_regime(
     """
     if not (math.isfinite(atol_m) and atol_m >= 0):
         raise ModelError(f"`atol_m` must be finite and >= 0, was {atol_m!r}")
-    diff = _as_backlash(backlash_m) - critical_gap(thermal_closure_m, chi)
+    diff = as_backlash(backlash_m) - critical_gap(thermal_closure_m, chi)
     out = np.where(np.abs(diff) <= atol_m, UNCHANGED, np.sign(diff))
     return np.asarray(out, dtype=np.int8)
 
@@ -827,16 +796,16 @@ def critical_gap_numerical(
     >>> [round(float(g) * 1e6, 9) for g in r.gap_m]
     [9.715, 9.715, 9.715]
     """
-    k = _as_positive("k_EP_N_per_m", k_EP_N_per_m)
-    d = _as_closure(thermal_closure_m)
-    x = float(_as_chi(chi))
-    share = _as_positive("load_share", load_share)
+    k = as_positive("k_EP_N_per_m", k_EP_N_per_m)
+    d = as_closure(thermal_closure_m)
+    x = float(as_chi(chi))
+    share = as_positive("load_share", load_share)
     k, d, share = (np.atleast_1d(a).astype(float) for a in np.broadcast_arrays(k, d, share))
     if k.ndim != 1:
         raise ModelError(f"`k_EP_N_per_m` must be 1-D along the path, had shape {k.shape}")
     w = np.full(k.shape, 1.0 / k.size) if weights is None else \
-        np.broadcast_to(_as_positive("weights", weights), k.shape).astype(float)
-    loads = np.atleast_1d(_as_positive("normal_loads_N", normal_loads_N)).astype(float)
+        np.broadcast_to(as_positive("weights", weights), k.shape).astype(float)
+    loads = np.atleast_1d(as_positive("normal_loads_N", normal_loads_N)).astype(float)
     if loads.ndim != 1:
         raise ModelError(f"`normal_loads_N` must be 1-D, had shape {loads.shape}")
     c_star = (1.0 - x) * d
@@ -938,13 +907,10 @@ def double_flank_contact(
     >>> r.double_flank.tolist(), (r.tangent_stiffness_N_per_m / 4e8).tolist()
     ([True, False], [2.0, 1.0])
     """
-    f = np.asarray(normal_load_N, dtype=float)
-    bad = ~(np.isfinite(f) & (f >= 0))
-    if np.any(bad):
-        raise ModelError(f"`normal_load_N` must be finite and >= 0, was {_first_bad(f, bad)!r}")
-    kd = _as_positive("k_EP_N_per_m", k_EP_N_per_m)
-    kb = kd if k_back_N_per_m is None else _as_positive("k_back_N_per_m", k_back_N_per_m)
-    i = _as_closure(interference_m, "interference_m")
+    f = as_nonnegative("normal_load_N", normal_load_N)
+    kd = as_positive("k_EP_N_per_m", k_EP_N_per_m)
+    kb = kd if k_back_N_per_m is None else as_positive("k_back_N_per_m", k_back_N_per_m)
+    i = as_closure(interference_m, "interference_m")
     f, kd, kb, i = np.broadcast_arrays(f, kd, kb, i)
     double = f < kd * i
     dd = np.where(double, (f + kb * i) / (kd + kb), f / kd)

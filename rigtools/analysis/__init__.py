@@ -1,8 +1,12 @@
-"""Signal analysis of Recordings: spectra, natural frequencies with damping, RMS, mesh orders.
+"""Signal analysis of arrays and Recordings: spectra, natural frequencies with damping, RMS, orders.
 
-Modules: :mod:`~rigtools.analysis.windows` (gap-aware segmenting),
+Pure signal computation: arrays and :class:`~rigtools.ingest.recording.Recording` objects in,
+frozen result dataclasses out; the campaign stage (:mod:`rigtools.campaign`) builds on it.
+
+Modules: :mod:`~rigtools.analysis.signal_checks` (argument types and the shared argument
+checks), :mod:`~rigtools.analysis.windows` (gap-aware segmenting),
 :mod:`~rigtools.analysis.spectra` (Welch PSD, amplitude spectrum, band RMS, quality checks; over
-:mod:`~rigtools.analysis.signal_checks`, :mod:`~rigtools.analysis.spectral_window`,
+:mod:`~rigtools.analysis.spectral_window`,
 :mod:`~rigtools.analysis.welch`, :mod:`~rigtools.analysis.rms`,
 :mod:`~rigtools.analysis.spectrum_results`),
 :mod:`~rigtools.analysis.peaks` (peak detection and mesh-line classification),
@@ -12,10 +16,8 @@ Modules: :mod:`~rigtools.analysis.windows` (gap-aware segmenting),
 speed steps; over :mod:`~rigtools.analysis.speed_types`, :mod:`~rigtools.analysis.tacho`,
 :mod:`~rigtools.analysis.speed_steps`), :mod:`~rigtools.analysis.resample` (angular resampling),
 :mod:`~rigtools.analysis.order_spectra` (order spectra, mesh harmonics, displacement),
-:mod:`~rigtools.analysis.campbell` (Campbell data), :mod:`~rigtools.analysis.orders` (Arms per
-step and along a run-up) and :mod:`~rigtools.analysis.observations` (the campaign table; its
-columns in :mod:`~rigtools.analysis.observation_table`, its files in
-:mod:`~rigtools.analysis.observation_files`).
+:mod:`~rigtools.analysis.campbell` (Campbell data) and :mod:`~rigtools.analysis.orders` (Arms
+per step and along a run-up).
 """
 
 from rigtools.analysis.orders import (
@@ -37,29 +39,28 @@ from rigtools.analysis.orders import (
     step_levels_from_recording,
 )
 from rigtools.analysis.peaks import (
-    ChannelAnalysis,
     HalfPower,
     LocationClass,
     ModalEstimate,
     Peak,
     PeakAnalysis,
-    QualityFlags,
-    RecordingAnalysis,
     SDOFFit,
     analyse_peaks,
-    analyse_recording,
     classify_frequency,
     fit_sdof,
     half_power_damping,
     natural_frequencies,
 )
+from rigtools.analysis.recording import (
+    ChannelAnalysis,
+    QualityFlags,
+    RecordingAnalysis,
+    analyse_recording,
+)
 from rigtools.analysis.spectra import (
     AmplitudeSpectrum,
     BandRMS,
     Clipping,
-    ConstantSignalError,
-    InsufficientDataError,
-    SignalError,
     Spectrum,
     WelchAccount,
     WindowProperties,
@@ -72,7 +73,6 @@ from rigtools.analysis.spectra import (
     window_properties,
 )
 from rigtools.analysis.speed import (
-    MissingSpeedError,
     SpeedProfile,
     SpeedStep,
     detect_speed_steps,
@@ -83,6 +83,12 @@ from rigtools.analysis.speed import (
     tacho_edges,
 )
 from rigtools.analysis.windows import Segments, n_windows, valid_segments
+from rigtools.errors import (
+    ConstantSignalError,
+    InsufficientDataError,
+    MissingSpeedError,
+    SignalError,
+)
 
 __all__ = [
     "RESAMPLER_PASSBAND",

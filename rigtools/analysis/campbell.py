@@ -9,21 +9,22 @@ import numpy as np
 
 from rigtools.analysis.order_spectra import (
     Campbell,
+    block_amplitudes,
+    check_samples_per_rev,
+    order_window,
+    order_windows,
+)
+from rigtools.analysis.signal_checks import (
     Quantity,
-    _block_amplitudes,
-    _check_quantity,
-    _check_samples_per_rev,
-    _order_windows,
-    _window,
+    as_1d,
+    check_int,
+    check_positive,
+    check_quantity,
+    check_sample_rate,
+    check_speed,
+    check_valid_1d,
 )
-from rigtools.analysis.resample import _check_int, _check_speed
-from rigtools.analysis.speed import (
-    SpeedProfile,
-    _as_1d,
-    _check_fs,
-    _check_positive,
-    _check_valid,
-)
+from rigtools.analysis.speed_types import SpeedProfile
 
 __all__ = ["Campbell", "frequency_campbell", "order_campbell"]
 
@@ -82,12 +83,12 @@ def order_campbell(
         ``axis_name == "order"``; rows are windows, windows meeting a gap are dropped and
         counted in ``dropped``.
     """
-    mo = _check_positive("max_order", max_order)
-    p = _check_samples_per_rev(samples_per_rev, mo)
-    camp, _, _ = _order_windows(
+    mo = check_positive("max_order", max_order)
+    p = check_samples_per_rev(samples_per_rev, mo)
+    camp, _, _ = order_windows(
         x, sample_rate_Hz, speed, start_time_s=start_time_s, valid=valid,
         revs_per_window=revs_per_window, hop_revs=hop_revs, samples_per_rev=p, window=window,
-        quantity=_check_quantity(quantity), highpass_Hz=highpass_Hz,
+        quantity=check_quantity(quantity), highpass_Hz=highpass_Hz,
         highpass_order=highpass_order, max_order=mo, min_speed_rpm=min_speed_rpm)
     return camp
 
@@ -134,37 +135,34 @@ def frequency_campbell(
     Campbell
         ``axis_name == "frequency_Hz"``.
     """
-    xs = _as_1d("x", x)
-    fs = _check_fs(sample_rate_Hz)
-    nps = _check_int("nperseg", nperseg, 2)
+    xs = as_1d("x", x)
+    fs = check_sample_rate(sample_rate_Hz)
+    nps = check_int("nperseg", nperseg, 2)
     if nps > xs.size:
         raise ValueError(f"`nperseg` must be <= len(x)={xs.size}, was {nps}")
-    nov = nps // 2 if noverlap is None else _check_int("noverlap", noverlap, 0)
+    nov = nps // 2 if noverlap is None else check_int("noverlap", noverlap, 0)
     if nov >= nps:
         raise ValueError(f"`noverlap` must be < nperseg={nps}, was {nov}")
-    ok = _check_valid(valid, xs.size) & np.isfinite(xs)
+    ok = check_valid_1d(valid, xs.size) & np.isfinite(xs)
     step = nps - nov
     starts = np.arange(0, xs.size - nps + 1, step)
     bad = np.r_[0, np.cumsum(~ok)]
     good = (bad[starts + nps] - bad[starts]) == 0
     dropped = {"gap": int(np.count_nonzero(~good))} if not np.all(good) else {}
     starts = starts[good]
-    w = _window(window, nps)
+    w = order_window(window, nps)
     freq = np.fft.rfftfreq(nps, 1.0 / fs)
     if starts.size:
         frames = np.stack([xs[s:s + nps] for s in starts])
-        amp = _block_amplitudes(frames, w)
+        amp = block_amplitudes(frames, w)
     else:
         amp = np.empty((0, freq.size))
     t_c = float(start_time_s) + (starts + nps / 2) / fs
     if speed is not None:
-        sp = _check_speed(speed)
+        sp = check_speed(speed)
         t_all = float(start_time_s) + np.arange(xs.size) / fs
         rpm_all = sp.rpm_at(t_all)
         rpm = np.array([np.mean(rpm_all[s:s + nps]) for s in starts])
     else:
         rpm = np.full(starts.size, np.nan)
     return Campbell(t_c, rpm, freq, "frequency_Hz", amp, "acceleration", dropped)
-
-
-# --- from a Recording -------------------------------------------------------------------------

@@ -1,6 +1,9 @@
 """Order spectra on the angle grid, mesh harmonic amplitudes and the shared block machinery.
 
-See :mod:`rigtools.analysis.orders` for the method and references.
+See :mod:`rigtools.analysis.orders` for the method and references. The block machinery
+(:class:`Block`, :func:`aligned_blocks`, :func:`block_spectra`, :func:`block_harmonics`,
+:func:`order_windows`) is shared with :mod:`rigtools.analysis.orders`
+and :mod:`rigtools.analysis.campbell`.
 """
 
 from __future__ import annotations
@@ -8,33 +11,30 @@ from __future__ import annotations
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Literal
 
 import numpy as np
 from scipy import signal as sps
 
-from rigtools.analysis.resample import (
-    RESAMPLER_PASSBAND,
-    AngleSignal,
-    _check_int,
-    resample_to_angle,
-)
-from rigtools.analysis.speed import (
-    SpeedProfile,
-    _as_1d,
-    _check_positive,
-)
+from rigtools.analysis.resample import RESAMPLER_PASSBAND, AngleSignal, resample_to_angle
+from rigtools.analysis.signal_checks import as_1d, check_int, check_positive
+from rigtools.analysis.speed_types import SpeedProfile
 
 __all__ = [
+    "Block",
     "Campbell",
     "OrderSpectrum",
     "acceleration_to_displacement",
+    "aligned_blocks",
+    "block_amplitudes",
+    "block_harmonics",
+    "block_spectra",
+    "blocks_to_displacement",
+    "check_samples_per_rev",
     "harmonic_amplitudes",
     "order_spectrum",
+    "order_window",
+    "order_windows",
 ]
-
-
-Quantity = Literal["acceleration", "displacement"]
 
 
 # --- results ----------------------------------------------------------------------
@@ -122,32 +122,20 @@ class Campbell:
     dropped: Mapping[str, int] = field(default_factory=dict)
 
 
-def _check_harmonics(harmonics: int | Sequence[int]) -> tuple[int, ...]:
-    if isinstance(harmonics, (int, np.integer)):
-        n = _check_int("harmonics", harmonics)
-        return tuple(range(1, n + 1))
-    hs = tuple(int(h) for h in harmonics)
-    if not hs or any(h < 1 or isinstance(h, bool) for h in harmonics):
-        raise ValueError(f"`harmonics` must be a count or a sequence of integers >= 1, "
-                         f"was {harmonics!r}")
-    return hs
-
-
-def _check_quantity(quantity: str) -> str:
-    if quantity not in ("acceleration", "displacement"):
-        raise ValueError(f"`quantity` must be 'acceleration' or 'displacement', was {quantity!r}")
-    return quantity
-
-
 def _auto_samples_per_rev(max_order: float) -> int:
+    """Smallest power of two (>= 16) of samples per revolution keeping ``max_order`` in band."""
     need = max_order / RESAMPLER_PASSBAND
     return int(2 ** max(4, int(np.ceil(np.log2(need)))))
 
 
-def _check_samples_per_rev(samples_per_rev: int | None, max_order: float) -> int:
+def check_samples_per_rev(samples_per_rev: int | None, max_order: float) -> int:
+    """Angular samples per revolution: ``samples_per_rev``, checked, or the automatic choice.
+
+    ValueError when ``max_order`` lies above the resampler's passband at that sampling.
+    """
     if samples_per_rev is None:
         return _auto_samples_per_rev(max_order)
-    p = _check_int("samples_per_rev", samples_per_rev, 4)
+    p = check_int("samples_per_rev", samples_per_rev, 4)
     if max_order > RESAMPLER_PASSBAND * p:
         raise ValueError(
             f"`samples_per_rev` must be >= {int(np.ceil(max_order / RESAMPLER_PASSBAND))} to "
@@ -156,7 +144,8 @@ def _check_samples_per_rev(samples_per_rev: int | None, max_order: float) -> int
     return p
 
 
-def _window(window: str, n: int) -> np.ndarray:
+def order_window(window: str, n: int) -> np.ndarray:
+    """The periodic ``scipy.signal`` window ``window`` of ``n`` samples (ValueError if unknown)."""
     try:
         return np.asarray(sps.get_window(window, n, fftbins=True), dtype=np.float64)
     except (ValueError, TypeError) as exc:
@@ -199,8 +188,8 @@ def acceleration_to_displacement(
     >>> bool(abs(abs(d) - 4.0 / (2 * np.pi * 400.0) ** 2) < 1e-15)
     True
     """
-    fc = _check_positive("highpass_Hz", highpass_Hz)
-    n = _check_int("highpass_order", highpass_order, 2)
+    fc = check_positive("highpass_Hz", highpass_Hz)
+    n = check_int("highpass_order", highpass_order, 2)
     a = np.asarray(amplitude)
     f = np.abs(np.asarray(frequency_Hz, dtype=np.float64))
     r = f / fc
@@ -213,7 +202,7 @@ def acceleration_to_displacement(
 
 
 # --- order spectra ----------------------------------------------------------------------------
-def _block_amplitudes(blocks: np.ndarray, w: np.ndarray) -> np.ndarray:
+def block_amplitudes(blocks: np.ndarray, w: np.ndarray) -> np.ndarray:
     """Amplitude spectra ``(b, N//2+1)`` of blocks ``(b, N)``, coherent gain corrected."""
     spec = np.abs(np.fft.rfft(blocks * w, axis=-1)) * (2.0 / w.sum())
     spec[:, 0] /= 2.0
@@ -258,19 +247,19 @@ def order_spectrum(
     >>> float(np.round(s.amplitude[s.order == 5][0], 12))
     3.0
     """
-    x = _as_1d("x_angle", x_angle)
-    p = _check_int("samples_per_rev", samples_per_rev, 2)
+    x = as_1d("x_angle", x_angle)
+    p = check_int("samples_per_rev", samples_per_rev, 2)
     if x.size == 0 or x.size % p:
         raise ValueError(f"`x_angle` must hold whole revolutions of {p} samples, has {x.size}")
-    r = x.size // p if revolutions is None else _check_int("revolutions", revolutions)
+    r = x.size // p if revolutions is None else check_int("revolutions", revolutions)
     nb = r * p
     if x.size % nb:
         raise ValueError(f"len(`x_angle`)={x.size} must be a multiple of revolutions x "
                          f"samples_per_rev = {nb}")
     if not np.all(np.isfinite(x)):
         raise ValueError("`x_angle` must be finite (gaps are split before the spectrum)")
-    w = _window(window, nb)
-    amp = np.sqrt(np.mean(_block_amplitudes(x.reshape(-1, nb), w) ** 2, axis=0))
+    w = order_window(window, nb)
+    amp = np.sqrt(np.mean(block_amplitudes(x.reshape(-1, nb), w) ** 2, axis=0))
     return OrderSpectrum(
         order=np.arange(amp.size) / r, amplitude=amp, revolutions=r, n_blocks=x.size // nb,
         speed_rpm=float(speed_rpm), enbw_bins=float(nb * np.sum(w**2) / np.sum(w) ** 2),
@@ -303,7 +292,7 @@ def harmonic_amplitudes(
     numpy.ndarray
         Amplitudes; NaN for orders above ``spectrum.max_valid_order`` or beyond the spectrum.
     """
-    m = _check_int("band_bins", band_bins, 0)
+    m = check_int("band_bins", band_bins, 0)
     o = np.atleast_1d(np.asarray(orders, dtype=np.float64))
     k0 = np.rint(o * spectrum.revolutions).astype(np.int64)
     out = np.full(o.shape, np.nan)
@@ -318,16 +307,18 @@ def harmonic_amplitudes(
 
 # --- blocks and windows on the angle grid -----------------------------------------------------
 @dataclass(frozen=True)
-class _Block:
-    start: int  # index into the AngleSignal arrays
+class Block:
+    """A block of whole revolutions: ``[start, stop)`` indices into an AngleSignal's arrays."""
+
+    start: int
     stop: int
 
 
-def _block_spectra(sig: AngleSignal, blocks: Sequence[_Block], w: np.ndarray, revs: int
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def block_spectra(sig: AngleSignal, blocks: Sequence[Block], w: np.ndarray, revs: int
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Per block: amplitude spectra, mean speed (rpm), centre time (s), top valid order."""
     data = np.stack([sig.values[b.start:b.stop] for b in blocks])
-    amp = _block_amplitudes(data, w)
+    amp = block_amplitudes(data, w)
     t0 = np.array([sig.time_s[b.start] for b in blocks])
     # block duration: from its first sample to one angular step past its last
     t1 = np.array([sig.time_s[b.stop - 1] + 60.0 / (sig.speed_rpm[b.stop - 1]
@@ -338,16 +329,16 @@ def _block_spectra(sig: AngleSignal, blocks: Sequence[_Block], w: np.ndarray, re
     return amp, rpm, 0.5 * (t0 + t1), max_order
 
 
-def _to_displacement(amp: np.ndarray, orders: np.ndarray, rpm: np.ndarray, highpass_Hz: float,
-                     highpass_order: int) -> np.ndarray:
+def blocks_to_displacement(amp: np.ndarray, orders: np.ndarray, rpm: np.ndarray,
+                           highpass_Hz: float, highpass_order: int) -> np.ndarray:
     """Amplitudes ``(b, k)`` at ``orders`` ``(k,)`` of blocks at speeds ``rpm`` ``(b,)``."""
     f = np.asarray(orders)[None, :] * rpm[:, None] / 60.0
     return np.abs(acceleration_to_displacement(amp, f, highpass_Hz=highpass_Hz,
                                                highpass_order=highpass_order))
 
 
-def _block_harmonics(amp: np.ndarray, revs: int, orders: Sequence[float], band: int,
-                     enbw: float, max_order: np.ndarray) -> np.ndarray:
+def block_harmonics(amp: np.ndarray, revs: int, orders: Sequence[float], band: int,
+                    enbw: float, max_order: np.ndarray) -> np.ndarray:
     """Band readouts ``(b, h)`` of ``orders`` from block amplitude spectra ``(b, k)``."""
     out = np.full((amp.shape[0], len(orders)), np.nan)
     a2 = amp**2
@@ -360,7 +351,7 @@ def _block_harmonics(amp: np.ndarray, revs: int, orders: Sequence[float], band: 
     return out
 
 
-def _aligned_blocks(sig: AngleSignal, sel: np.ndarray, revs: int) -> list[_Block]:
+def aligned_blocks(sig: AngleSignal, sel: np.ndarray, revs: int) -> list[Block]:
     """Blocks of ``revs`` whole revolutions inside the contiguous index range ``sel``.
 
     ``sel`` indexes ``sig``; blocks start at whole revolutions of the angle grid.
@@ -374,13 +365,13 @@ def _aligned_blocks(sig: AngleSignal, sel: np.ndarray, revs: int) -> list[_Block
     out = []
     s = sel[0] + (first - jj[0])
     while s + nb <= sel[-1] + 1:
-        out.append(_Block(int(s), int(s + nb)))
+        out.append(Block(int(s), int(s + nb)))
         s += nb
     return out
 
 
 def _run_up_windows(sig: AngleSignal, revs: int, hop: int
-                    ) -> tuple[list[_Block], Counter[str]]:
+                    ) -> tuple[list[Block], Counter[str]]:
     """Windows of ``revs`` revolutions every ``hop`` revolutions on the global angle grid.
 
     Those not lying wholly inside one run are dropped and counted by the run's end reason.
@@ -403,7 +394,7 @@ def _run_up_windows(sig: AngleSignal, revs: int, hop: int
         r = int(np.searchsorted(j_first, a, side="right")) - 1  # last run starting at <= a
         if r >= 0 and a >= j_first[r] and e <= j_last[r]:
             s = int(run_starts[r] + (a - j_first[r]))
-            out.append(_Block(s, s + n))
+            out.append(Block(s, s + n))
         else:
             # the break the window meets: the end of run r (or of the run before a)
             rr = max(r, 0)
@@ -412,7 +403,7 @@ def _run_up_windows(sig: AngleSignal, revs: int, hop: int
     return out, dropped
 
 
-def _order_windows(
+def order_windows(
     x: np.ndarray, sample_rate_Hz: float, speed: SpeedProfile | None, *, start_time_s: float,
     valid: np.ndarray | None, revs_per_window: int, hop_revs: int | None,
     samples_per_rev: int, window: str, quantity: str, highpass_Hz: float,
@@ -423,8 +414,8 @@ def _order_windows(
     Returns the Campbell data (in ``quantity``), the spectra as given (acceleration) and each
     window's top valid order.
     """
-    revs = _check_int("revs_per_window", revs_per_window)
-    hop = revs // 2 if hop_revs is None else _check_int("hop_revs", hop_revs)
+    revs = check_int("revs_per_window", revs_per_window)
+    hop = revs // 2 if hop_revs is None else check_int("hop_revs", hop_revs)
     hop = max(hop, 1)
     sig = resample_to_angle(x, sample_rate_Hz, speed, samples_per_rev=samples_per_rev,
                             start_time_s=start_time_s, valid=valid, min_speed_rpm=min_speed_rpm)
@@ -435,11 +426,11 @@ def _order_windows(
         empty = np.empty((0, ncols))
         return (Campbell(np.empty(0), np.empty(0), orders, "order", empty, quantity,
                          dict(dropped)), empty, np.empty(0))
-    w = _window(window, revs * sig.samples_per_rev)
+    w = order_window(window, revs * sig.samples_per_rev)
     amps, rpms, times, maxo = [], [], [], []
     chunk = max(1, (1 << 22) // (revs * sig.samples_per_rev))
     for i in range(0, len(blocks), chunk):
-        a, r, t, m = _block_spectra(sig, blocks[i:i + chunk], w, revs)
+        a, r, t, m = block_spectra(sig, blocks[i:i + chunk], w, revs)
         amps.append(a[:, :ncols])
         rpms.append(r)
         times.append(t)
@@ -447,8 +438,8 @@ def _order_windows(
     acc = np.concatenate(amps)
     mo = np.concatenate(maxo)
     rpm = np.concatenate(rpms)
-    amp = acc if quantity == "acceleration" else _to_displacement(acc, orders, rpm, highpass_Hz,
-                                                                  highpass_order)
+    amp = acc if quantity == "acceleration" else blocks_to_displacement(
+        acc, orders, rpm, highpass_Hz, highpass_order)
     amp[orders[None, :] > mo[:, None]] = np.nan
     camp = Campbell(np.concatenate(times), rpm, orders, "order", amp, quantity, dict(dropped))
     return camp, acc, mo

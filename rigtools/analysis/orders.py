@@ -80,43 +80,36 @@ from typing import Any
 
 import numpy as np
 
+from models.geometry import check_teeth, mesh_frequency_Hz
 from rigtools.analysis.campbell import frequency_campbell, order_campbell
 from rigtools.analysis.order_spectra import (
+    Block,
     Campbell,
     OrderSpectrum,
-    Quantity,
-    _aligned_blocks,
-    _Block,
-    _block_harmonics,
-    _block_spectra,
-    _check_harmonics,
-    _check_quantity,
-    _check_samples_per_rev,
-    _order_windows,
-    _to_displacement,
-    _window,
     acceleration_to_displacement,
+    aligned_blocks,
+    block_harmonics,
+    block_spectra,
+    blocks_to_displacement,
+    check_samples_per_rev,
     harmonic_amplitudes,
     order_spectrum,
+    order_window,
+    order_windows,
 )
-from rigtools.analysis.resample import (
-    RESAMPLER_PASSBAND,
-    AngleSignal,
-    _check_int,
-    _check_speed,
-    resample_to_angle,
+from rigtools.analysis.resample import RESAMPLER_PASSBAND, AngleSignal, resample_to_angle
+from rigtools.analysis.signal_checks import (
+    Quantity,
+    as_1d,
+    check_harmonics,
+    check_int,
+    check_quantity,
+    check_sample_rate,
+    check_speed,
+    check_valid_1d,
 )
-from rigtools.analysis.speed import (
-    SpeedProfile,
-    SpeedStep,
-    _as_1d,
-    _check_fs,
-    _check_teeth,
-    _check_valid,
-    _runs,
-    detect_speed_steps,
-    speed_profile,
-)
+from rigtools.analysis.speed import SpeedProfile, SpeedStep, detect_speed_steps, speed_profile
+from rigtools.analysis.windows import true_runs
 from rigtools.ingest.recording import Recording
 
 __all__ = [
@@ -306,35 +299,35 @@ def run_up_curve(
     RunUpCurve
         Windows meeting a gap are dropped and counted (``dropped``).
     """
-    z = _check_teeth(z1)
-    hs = _check_harmonics(harmonics)
-    m = _check_int("band_bins", band_bins, 0)
-    revs = _check_int("revs_per_window", revs_per_window)
+    z = check_teeth(z1)
+    hs = check_harmonics(harmonics)
+    m = check_int("band_bins", band_bins, 0)
+    revs = check_int("revs_per_window", revs_per_window)
     top = max(hs) * z + (m + 1) / revs
-    p = _check_samples_per_rev(samples_per_rev, top)
-    q = _check_quantity(quantity)
-    camp, acc, maxo = _order_windows(
+    p = check_samples_per_rev(samples_per_rev, top)
+    q = check_quantity(quantity)
+    camp, acc, maxo = order_windows(
         x, sample_rate_Hz, speed, start_time_s=start_time_s, valid=valid,
         revs_per_window=revs, hop_revs=hop_revs, samples_per_rev=p, window=window,
         quantity=q, highpass_Hz=highpass_Hz, highpass_order=highpass_order,
         max_order=top, min_speed_rpm=min_speed_rpm)
-    w = _window(window, revs * p)
+    w = order_window(window, revs * p)
     enbw = float(revs * p * np.sum(w**2) / np.sum(w) ** 2)
     orders = [h * z for h in hs]
-    amp = _block_harmonics(acc, revs, orders, m, enbw, maxo)
+    amp = block_harmonics(acc, revs, orders, m, enbw, maxo)
     if q == "displacement":
-        amp = _to_displacement(amp, np.asarray(orders, float), camp.speed_rpm, highpass_Hz,
-                               highpass_order)
+        amp = blocks_to_displacement(amp, np.asarray(orders, float), camp.speed_rpm,
+                                     highpass_Hz, highpass_order)
     return RunUpCurve(
         time_s=camp.time_s, speed_rpm=camp.speed_rpm,
-        mesh_frequency_Hz=camp.speed_rpm * z / 60.0, harmonics=hs, amplitude=amp,
+        mesh_frequency_Hz=mesh_frequency_Hz(camp.speed_rpm, z), harmonics=hs, amplitude=amp,
         arms=np.sqrt(np.sum(amp**2, axis=1)), z1=z, revs_per_window=revs,
         hop_revs=max(1, revs // 2) if hop_revs is None else int(hop_revs), samples_per_rev=p,
         quantity=q, spectra=camp, dropped=dict(camp.dropped))
 
 
 def _count_stretches(mask: np.ndarray) -> int:
-    return len(_runs(mask))
+    return len(true_runs(mask))
 
 
 def step_levels(
@@ -382,26 +375,26 @@ def step_levels(
     -------
     StepLevels
     """
-    speed = _check_speed(speed)
-    z = _check_teeth(z1)
-    hs = _check_harmonics(harmonics)
-    m = _check_int("band_bins", band_bins, 0)
-    revs = _check_int("revs_per_block", revs_per_block)
-    p = _check_samples_per_rev(samples_per_rev, max(hs) * z + (m + 1) / revs)
-    q = _check_quantity(quantity)
+    speed = check_speed(speed)
+    z = check_teeth(z1)
+    hs = check_harmonics(harmonics)
+    m = check_int("band_bins", band_bins, 0)
+    revs = check_int("revs_per_block", revs_per_block)
+    p = check_samples_per_rev(samples_per_rev, max(hs) * z + (m + 1) / revs)
+    q = check_quantity(quantity)
     if steps is None:
         steps = detect_speed_steps(speed, rel_tolerance=rel_tolerance,
                                    abs_tolerance_rpm=abs_tolerance_rpm,
                                    min_duration_s=min_duration_s)
     steps = tuple(steps)
-    xs = _as_1d("x", x)
-    fs = _check_fs(sample_rate_Hz)
-    ok = _check_valid(valid, xs.size) & np.isfinite(xs)
+    xs = as_1d("x", x)
+    fs = check_sample_rate(sample_rate_Hz)
+    ok = check_valid_1d(valid, xs.size) & np.isfinite(xs)
     sig = resample_to_angle(xs, fs, speed, samples_per_rev=p, start_time_s=start_time_s,
                             valid=ok, min_speed_rpm=min_speed_rpm)
     t_in = float(start_time_s) + np.arange(xs.size) / fs
     known = np.isfinite(speed.rpm_at(t_in))
-    w = _window(window, revs * p)
+    w = order_window(window, revs * p)
     enbw = float(revs * p * np.sum(w**2) / np.sum(w) ** 2)
     ns = len(steps)
     amp = np.full((ns, len(hs)), np.nan)
@@ -415,10 +408,10 @@ def step_levels(
         inside = (t_in >= st.start_s) & (t_in <= st.stop_s)
         n_gaps[i] = _count_stretches(inside & ~(ok & known))
         sel_all = np.flatnonzero((sig.time_s >= st.start_s) & (sig.time_s <= st.stop_s))
-        blocks: list[_Block] = []
+        blocks: list[Block] = []
         for r in np.unique(sig.run[sel_all]):
             piece = sel_all[sig.run[sel_all] == r]
-            b = _aligned_blocks(sig, piece, revs)
+            b = aligned_blocks(sig, piece, revs)
             if b:
                 n_pieces[i] += 1
                 blocks.extend(b)
@@ -428,15 +421,15 @@ def step_levels(
             dropped["step_without_block"] += 1
             spectra.append(None)
             continue
-        a, r_b, _, mo = _block_spectra(sig, blocks, w, revs)
+        a, r_b, _, mo = block_spectra(sig, blocks, w, revs)
         orders = [h * z for h in hs]
-        hb = _block_harmonics(a, revs, orders, m, enbw, mo)
+        hb = block_harmonics(a, revs, orders, m, enbw, mo)
         if q == "displacement":
             # each harmonic converted at its own frequency in each block, then averaged
-            hb = _to_displacement(hb, np.asarray(orders, float), r_b, highpass_Hz,
-                                  highpass_order)
-            a = _to_displacement(a, np.arange(a.shape[1]) / revs, r_b, highpass_Hz,
-                                 highpass_order)
+            hb = blocks_to_displacement(hb, np.asarray(orders, float), r_b, highpass_Hz,
+                                        highpass_order)
+            a = blocks_to_displacement(a, np.arange(a.shape[1]) / revs, r_b, highpass_Hz,
+                                       highpass_order)
         spec = OrderSpectrum(
             order=np.arange(a.shape[1]) / revs, amplitude=np.sqrt(np.mean(a**2, axis=0)),
             revolutions=revs, n_blocks=len(blocks),
@@ -447,7 +440,7 @@ def step_levels(
         rpm[i] = spec.speed_rpm
         amp[i] = np.sqrt(np.mean(hb**2, axis=0))
     return StepLevels(
-        steps=steps, speed_rpm=rpm, mesh_frequency_Hz=rpm * z / 60.0, harmonics=hs,
+        steps=steps, speed_rpm=rpm, mesh_frequency_Hz=mesh_frequency_Hz(rpm, z), harmonics=hs,
         amplitude=amp, arms=np.sqrt(np.sum(amp**2, axis=1)), n_blocks=n_blocks,
         n_pieces=n_pieces, n_gaps=n_gaps, z1=z, revs_per_block=revs, samples_per_rev=p,
         quantity=q, spectra=tuple(spectra), dropped={k: v for k, v in dropped.items() if v})

@@ -46,8 +46,9 @@ For each peak of a Welch PSD (:class:`~rigtools.analysis.spectra.Spectrum`):
    line (lines as narrow as a tone) is ``"structural"``; one on a mesh harmonic stays
    ``"mesh_harmonic"`` with ``possible_resonance`` set.
 
-:func:`analyse_recording` runs spectra, RMS, quality checks and peaks over the channels of a
-:class:`~rigtools.ingest.recording.Recording` and returns one :class:`ChannelAnalysis` each.
+:func:`~rigtools.analysis.recording.analyse_recording` runs spectra, RMS, quality checks and
+peaks over the channels of a :class:`~rigtools.ingest.recording.Recording` and returns one
+:class:`~rigtools.analysis.recording.ChannelAnalysis` each.
 
 References
 ----------
@@ -72,46 +73,35 @@ from scipy import signal as sps
 from scipy.ndimage import median_filter
 from scipy.stats import chi2
 
-from rigtools.analysis.recording import (
-    ChannelAnalysis,
-    QualityFlags,
-    RecordingAnalysis,
-    analyse_recording,
-)
 from rigtools.analysis.sdof_fit import (
     LINE_FIT_FACTOR,
     HalfPower,
-    Response,
+    PSDContext,
     SDOFFit,
-    _check_response,
-    _fit_sdof,
-    _half_power,
-    _mask_line,
-    _not_fitted,
-    _PSDContext,
-    _zeta_resolution,
     fit_sdof,
+    fit_sdof_in_band,
     half_power_damping,
+    half_power_in_band,
+    mask_line,
+    not_fitted,
+    zeta_resolution,
 )
-from rigtools.analysis.spectra import (
-    SignalError,
-    Spectrum,
-    _check_band,
-)
+from rigtools.analysis.signal_checks import Response, check_band, check_response
+from rigtools.analysis.spectrum_results import Spectrum
+from rigtools.errors import SignalError
 
 __all__ = [
-    "ChannelAnalysis",
+    "FALSE_ALARM",
+    "LOW_DOF",
     "HalfPower",
     "LocationClass",
     "ModalEstimate",
     "Peak",
     "PeakAnalysis",
-    "QualityFlags",
-    "RecordingAnalysis",
     "SDOFFit",
     "analyse_peaks",
-    "analyse_recording",
     "classify_frequency",
+    "detection_threshold_db",
     "fit_sdof",
     "half_power_damping",
     "natural_frequencies",
@@ -393,16 +383,16 @@ def classify_frequency(f_Hz: float, *, mesh_frequency_Hz: float | None,
     return best[1] if best is not None else LocationClass()
 
 
-def _estimate(ctx: _PSDContext, k0: int, lo: int, hi: int, mask: np.ndarray, p: int,
+def _estimate(ctx: PSDContext, k0: int, lo: int, hi: int, mask: np.ndarray, p: int,
               fit_span: float, response: str, line: bool = False) -> ModalEstimate:
     f_pk, f_std, ln_pk = ctx.interpolate(k0)
-    zres = _zeta_resolution(ctx, f_pk)
-    hp = _half_power(ctx, k0, lo, hi, mask)
+    zres = zeta_resolution(ctx, f_pk)
+    hp = half_power_in_band(ctx, k0, lo, hi, mask)
     if line and not (hp.zeta > LINE_FIT_FACTOR * zres):
-        fit = _not_fitted("not fitted: a mesh or shaft line no wider than the window "
+        fit = not_fitted("not fitted: a mesh or shaft line no wider than the window "
                           f"(half-power zeta <= {LINE_FIT_FACTOR:g} x resolution equivalent)")
     else:
-        fit = _fit_sdof(ctx, k0, lo, hi, mask, hp.zeta, zres, p, fit_span)
+        fit = fit_sdof_in_band(ctx, k0, lo, hi, mask, hp.zeta, zres, p, fit_span)
     return ModalEstimate(
         f_n_Hz=fit.f_n_Hz, f_n_std_Hz=fit.f_n_std_Hz, zeta=fit.zeta, zeta_std=fit.zeta_std,
         zeta_half_power=hp.zeta, zeta_half_power_std=hp.zeta_std, f_peak_Hz=f_pk,
@@ -463,15 +453,15 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
     A mesh or shaft line near a peak is masked out of that peak's half-power search and fit;
     another unexplained peak limits the fitted band at the PSD minimum between the two.
     """
-    p = _check_response(response)
-    ctx = _PSDContext(spectrum)
+    p = check_response(response)
+    ctx = PSDContext(spectrum)
     f, lnP, df = ctx.f, ctx.lnP, ctx.df
     n = f.size
     first = int(np.ceil(ctx.props.mainlobe_half_width_bins)) + 1
     if f_range_Hz is None:
         a, b = first, n - 1
     else:
-        lo_, hi_ = _check_band(f_range_Hz, spectrum.fs_Hz)
+        lo_, hi_ = check_band(f_range_Hz, spectrum.fs_Hz)
         a, b = max(int(np.ceil(lo_ / df)), 1), min(int(np.floor(hi_ / df)), n - 1)
     if not (np.isfinite(prominence_dB) and prominence_dB >= 0):
         raise SignalError("prominence_dB", "finite and >= 0", repr(prominence_dB))
@@ -480,7 +470,7 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
     sigma_dB = 10 * np.log10(np.e) * np.sqrt(ctx.eps2)
     threshold = max(float(prominence_dB), float(min_sigma) * sigma_dB)
     LdB = 10 * np.log10(np.e) * lnP
-    detect_dB, spread_dB = _detection_threshold_db(ctx.dof, b - a + 1, false_alarm)
+    detect_dB, spread_dB = detection_threshold_db(ctx.dof, b - a + 1, false_alarm)
     bg_dB = 10 * np.log10(np.e) * _background_log(ctx)
     idx, props = sps.find_peaks(LdB[a: b + 1], prominence=threshold)
     idx = idx + a
@@ -506,18 +496,18 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
     line_mask = np.zeros(n, bool)
     for k, *_, loc in located:
         if loc.kind is not None:
-            _mask_line(ctx, k, line_mask)
+            mask_line(ctx, k, line_mask)
     if mesh_frequency_Hz is not None and mesh_frequency_Hz > 0:
         # mesh harmonics too weak to be detected as peaks still bend a nearby fit
         for fk in np.arange(1, int(f[-1] // mesh_frequency_Hz) + 1) * mesh_frequency_Hz:
             k = round(fk / df)
             if 0 < k < n - 1 and not line_mask[k]:
-                _mask_line(ctx, k + int(np.argmax(lnP[k - 1: k + 2])) - 1, line_mask)
+                mask_line(ctx, k + int(np.argmax(lnP[k - 1: k + 2])) - 1, line_mask)
     free = [k for k, *_, loc in located if loc.kind is None]
     peaks = []
     for k, fk, fstd, lnk, loc in located:
         own = np.zeros(n, bool)  # the peak itself is what is measured: never masked
-        _mask_line(ctx, k, own)
+        mask_line(ctx, k, own)
         mask = line_mask & ~own
         lo, hi = 1, n - 2
         others = [j for j in free if j != k] if loc.kind is None else [
@@ -556,7 +546,7 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
                         false_alarm=float(false_alarm))
 
 
-def _detection_threshold_db(dof: float, n_bins: int, false_alarm: float
+def detection_threshold_db(dof: float, n_bins: int, false_alarm: float
                            ) -> tuple[float, float]:
     r"""Detection threshold (dB) above the local background, and noise's prominence spread.
 
@@ -576,7 +566,7 @@ def _detection_threshold_db(dof: float, n_bins: int, false_alarm: float
     return hi, hi - lo
 
 
-def _background_log(ctx: _PSDContext) -> np.ndarray:
+def _background_log(ctx: PSDContext) -> np.ndarray:
     r"""Natural log of the local background PSD: running median over a wide window, bias-corrected.
 
     The window (at least 65 bins, a sixteenth of the spectrum) is wide against a resonance,

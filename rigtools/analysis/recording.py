@@ -6,39 +6,32 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any, Literal
 
 import numpy as np
 
-from rigtools.analysis.sdof_fit import Response, _check_response
-from rigtools.analysis.spectra import (
+from rigtools.analysis.peaks import LOW_DOF, ModalEstimate, PeakAnalysis, analyse_peaks
+from rigtools.analysis.rms import mean_square_time, rms_from_psd
+from rigtools.analysis.signal_checks import (
     Average,
-    BandRMS,
-    Clipping,
-    ConstantSignalError,
     Detrend,
-    InsufficientDataError,
-    SignalError,
-    Spectrum,
-    WelchAccount,
+    Response,
     Window,
-    _check_band,
-    _check_detrend,
-    _check_fs,
-    _check_noverlap,
-    _mean_square_time,
-    _resolve_nperseg,
-    _welch_core,
-    _window_array,
-    detect_clipping,
-    rms_from_psd,
-    window_properties,
+    check_band,
+    check_detrend,
+    check_fs,
+    check_noverlap,
+    check_response,
+    resolve_nperseg,
 )
-
-if TYPE_CHECKING:
-    from rigtools.analysis.peaks import ModalEstimate, PeakAnalysis
+from rigtools.analysis.spectra import detect_clipping
+from rigtools.analysis.spectral_window import window_array, window_properties
+from rigtools.analysis.spectrum_results import BandRMS, Clipping, Spectrum, WelchAccount
+from rigtools.analysis.welch import welch_core
+from rigtools.errors import ConstantSignalError, InsufficientDataError, SignalError
+from rigtools.ingest.recording import Channel, Recording
 
 __all__ = ["ChannelAnalysis", "QualityFlags", "RecordingAnalysis", "analyse_recording"]
 
@@ -83,6 +76,14 @@ class QualityFlags:
     def clipped(self) -> bool:
         """The channel holds runs at its extreme values (see :func:`detect_clipping`)."""
         return bool(self.clipping is not None and self.clipping.clipped)
+
+    @property
+    def low_dof(self) -> bool:
+        """Few Welch averages (``0 < dof < LOW_DOF``): damping less reliable.
+
+        The same threshold as :attr:`~rigtools.analysis.peaks.ModalEstimate.low_dof`.
+        """
+        return bool(0 < self.dof < LOW_DOF)
 
     @property
     def ok(self) -> bool:
@@ -144,11 +145,8 @@ class RecordingAnalysis:
         return self.channels[name]
 
 
-def _channels_of(rec: Any, names: Sequence[str] | None) -> dict[str, Any]:
-    chans = rec.channels if hasattr(rec, "channels") else rec
-    if not isinstance(chans, Mapping):
-        raise SignalError("rec", "a Recording or a mapping of name to Channel",
-                          type(rec).__name__)
+def _channels_of(rec: Recording, names: Sequence[str] | None) -> dict[str, Channel]:
+    chans = rec.channels
     if names is None:
         return dict(chans)
     missing = [n for n in names if n not in chans]
@@ -158,7 +156,7 @@ def _channels_of(rec: Any, names: Sequence[str] | None) -> dict[str, Any]:
     return {n: chans[n] for n in names}
 
 
-def analyse_recording(rec: Any, *, channels: Sequence[str] | None = None,
+def analyse_recording(rec: Recording, *, channels: Sequence[str] | None = None,
                       nperseg: int | None = None, resolution_Hz: float | None = None,
                       noverlap: int | None = None, window: Window = "hann",
                       detrend: Detrend = "constant", average: Average = "mean",
@@ -176,14 +174,14 @@ def analyse_recording(rec: Any, *, channels: Sequence[str] | None = None,
 
     Parameters
     ----------
-    rec : Recording or mapping of str to Channel
-        The recording (its ``channels``).
+    rec : Recording
+        The recording.
     channels : sequence of str, optional
         Channels to analyse; default all.
     nperseg, resolution_Hz, noverlap, window, detrend, average
         As for :func:`~rigtools.analysis.spectra.welch_psd`.
     mesh_frequency_Hz, shaft_frequencies_Hz, prominence_dB, f_range_Hz, max_peaks, response
-        As for :func:`analyse_peaks`.
+        As for :func:`~rigtools.analysis.peaks.analyse_peaks`.
     bands_Hz : sequence of (float, float)
         Bands for band-limited RMS (Hz).
     peaks : bool
@@ -201,13 +199,12 @@ def analyse_recording(rec: Any, *, channels: Sequence[str] | None = None,
     -------
     RecordingAnalysis
     """
-    from rigtools.analysis.peaks import analyse_peaks  # peaks re-exports this module
     if errors not in ("flag", "raise"):
         raise SignalError("errors", "'flag' or 'raise'", repr(errors))
     if average not in ("mean", "median"):
         raise SignalError("average", "'mean' or 'median'", repr(average))
-    _check_response(response)
-    det = _check_detrend(detrend)
+    check_response(response)
+    det = check_detrend(detrend)
     chans = _channels_of(rec, channels)
     bands = [tuple(float(v) for v in b) for b in bands_Hz]
     settings = {"nperseg": nperseg, "resolution_Hz": resolution_Hz, "noverlap": noverlap,
@@ -221,7 +218,7 @@ def analyse_recording(rec: Any, *, channels: Sequence[str] | None = None,
     groups: dict[tuple[Any, ...], list[str]] = {}
     prep: dict[str, dict[str, Any]] = {}
     for name, ch in chans.items():
-        fs = _check_fs(ch.sample_rate_Hz)
+        fs = check_fs(ch.sample_rate_Hz)
         x = np.asarray(ch.values)
         v = np.asarray(ch.valid, bool)
         whole = bool(v.all())
@@ -239,12 +236,12 @@ def analyse_recording(rec: Any, *, channels: Sequence[str] | None = None,
                 _constant_error(name, n_valid, clip.high))
             _fail(results, name, ch, prep[name], err, errors, constant=n_valid > 0)
             continue
-        nps = _resolve_nperseg(nperseg, resolution_Hz, fs)
+        nps = resolve_nperseg(nperseg, resolution_Hz, fs)
         key = (fs, x.size, x.dtype.str, nps, b"all" if whole else v.tobytes())
         groups.setdefault(key, []).append(name)
     for (fs, n, _, nps, _), names in groups.items():
-        nov = _check_noverlap(noverlap, nps)
-        w = _window_array(window, nps)
+        nov = check_noverlap(noverlap, nps)
+        w = window_array(window, nps)
         wkey = window if not isinstance(window, np.ndarray) else w
         props = window_properties(wkey, nps)
         first = prep[names[0]]
@@ -257,7 +254,7 @@ def analyse_recording(rec: Any, *, channels: Sequence[str] | None = None,
         xs = first["x"][None, :] if len(names) == 1 else np.stack(
             [prep[nm]["x"] for nm in names])
         try:
-            freq, P, acc, segs_list = _welch_core(xs, mask, fs, w, nps, nov, det, average,
+            freq, P, acc, segs_list = welch_core(xs, mask, fs, w, nps, nov, det, average,
                                                   "density", props)
         except SignalError as e:
             for name in names:
@@ -265,9 +262,9 @@ def analyse_recording(rec: Any, *, channels: Sequence[str] | None = None,
             continue
         segs = segs_list[0]
         rows = np.arange(len(names))
-        tot, cnt = _mean_square_time(xs, segs, rows, fs, (0.0, fs / 2), det)
-        band_ms = [(band, *_mean_square_time(xs, segs, rows, fs, band, det))
-                   for band in (_check_band(b, fs) for b in bands)]
+        tot, cnt = mean_square_time(xs, segs, rows, fs, (0.0, fs / 2), det)
+        band_ms = [(band, *mean_square_time(xs, segs, rows, fs, band, det))
+                   for band in (check_band(b, fs) for b in bands)]
         for i, name in enumerate(names):
             pr = prep[name]
             ch = pr["ch"]
@@ -326,7 +323,7 @@ def _short_error(nps: int, longest: int, fs: float, n: int, what: str) -> Signal
         f"resolution {fs / nps:g} Hz needs {nps / fs:g} s of signal, there are {n / fs:g} s")
 
 
-def _fail(results: dict[str, ChannelAnalysis], name: str, ch: Any, pr: dict[str, Any],
+def _fail(results: dict[str, ChannelAnalysis], name: str, ch: Channel, pr: dict[str, Any],
           err: SignalError, errors: str, constant: bool = False, too_short: bool = False
           ) -> None:
     err = err if err.channel == name else err.for_channel(name)

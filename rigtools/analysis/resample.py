@@ -14,14 +14,16 @@ from typing import Any
 import numpy as np
 from scipy.special import i0
 
-from rigtools.analysis.speed import (
-    MissingSpeedError,
-    SpeedProfile,
-    _as_1d,
-    _check_fs,
-    _check_valid,
-    _runs,
+from rigtools.analysis.signal_checks import (
+    as_1d,
+    check_int,
+    check_sample_rate,
+    check_speed,
+    check_valid_1d,
 )
+from rigtools.analysis.speed_types import SpeedProfile
+from rigtools.analysis.windows import true_runs
+from rigtools.errors import MissingSpeedError
 
 __all__ = ["RESAMPLER_PASSBAND", "AngleSignal", "resample_to_angle"]
 
@@ -79,22 +81,6 @@ class AngleSignal:
     def index(self) -> np.ndarray:
         """Angle sample numbers ``j`` (int)."""
         return np.rint(self.angle_rev * self.samples_per_rev).astype(np.int64)
-
-
-# --- validation -------------------------------------------------------------------------------
-def _check_int(name: str, value: Any, minimum: int = 1) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise ValueError(f"`{name}` must be an integer >= {minimum}, was {value!r}")
-    return int(value)
-
-
-def _check_speed(speed: SpeedProfile | None) -> SpeedProfile:
-    if speed is None:
-        raise MissingSpeedError(None, detail="`speed` is None; build one with "
-                                "speed_from_slow_signal, speed_from_tacho or speed_profile")
-    if not isinstance(speed, SpeedProfile):
-        raise TypeError(f"`speed` must be a SpeedProfile, was {type(speed).__name__}")
-    return speed
 
 
 # --- angular resampling -----------------------------------------------------------------------
@@ -166,11 +152,11 @@ def resample_to_angle(
     MissingSpeedError
         When ``speed`` is None or covers no sample of ``x``.
     """
-    speed = _check_speed(speed)
-    xs = _as_1d("x", x)
-    fs = _check_fs(sample_rate_Hz)
-    p = _check_int("samples_per_rev", samples_per_rev, 4)
-    ok = _check_valid(valid, xs.size) & np.isfinite(xs)
+    speed = check_speed(speed)
+    xs = as_1d("x", x)
+    fs = check_sample_rate(sample_rate_Hz)
+    p = check_int("samples_per_rev", samples_per_rev, 4)
+    ok = check_valid_1d(valid, xs.size) & np.isfinite(xs)
     n = xs.size
     t = float(start_time_s) + np.arange(n) / fs
     f = speed.frequency_Hz_at(t)
@@ -184,7 +170,7 @@ def resample_to_angle(
     # 1. shaft angle, per stretch of known speed; each stretch starts on a whole revolution
     theta = np.full(n, np.nan)
     offset = 0.0
-    for a, b in _runs(known):
+    for a, b in true_runs(known):
         inc = 0.5 * (f[a + 1:b] + f[a:b - 1]) / fs
         theta[a:b] = offset + np.r_[0.0, np.cumsum(inc)]
         offset = float(np.ceil(theta[b - 1])) + 1.0
@@ -195,7 +181,7 @@ def resample_to_angle(
     rho_all = np.minimum(1.0, p * np.where(known, f, 0.0) / fs)
     ang, val, tim, spd, run = [], [], [], [], []
     run_end: list[str] = []
-    for a, b in _runs(usable):
+    for a, b in true_runs(usable):
         th = theta[a:b]
         j0 = int(np.ceil(th[0] * p - 1e-9))
         j1 = int(np.floor(th[-1] * p + 1e-9))
@@ -213,7 +199,7 @@ def resample_to_angle(
             continue
         reason = "end" if b == n else ("speed_unknown" if ok[b] else "gap")
         # the kept outputs are consecutive (the kernel width changes slowly); guard anyway
-        pieces = _runs(keep)
+        pieces = true_runs(keep)
         covered = 0
         for q, (ka, kb) in enumerate(pieces):
             uu = u[ka:kb]

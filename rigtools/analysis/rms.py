@@ -1,7 +1,8 @@
 """Band-limited RMS: :func:`band_rms` and :func:`rms_from_psd`.
 
-RMS in the time domain (band-passed, detrended valid segments) and by Parseval from the PSD,
-with the private time-domain mean-square helpers.
+RMS in the time domain (band-passed, detrended valid segments) and by Parseval from the PSD;
+:func:`mean_square_time`, the time-domain sum of squares, is shared with
+:mod:`rigtools.analysis.recording`.
 """
 
 from __future__ import annotations
@@ -14,14 +15,17 @@ from scipy import signal as sps
 
 from rigtools.analysis.signal_checks import (
     Detrend,
-    SignalError,
     Window,
-    _check_band,
-    _norm_axis,
+    check_band,
+    check_not_constant,
+    norm_axis,
 )
 from rigtools.analysis.spectrum_results import BandRMS, Spectrum
-from rigtools.analysis.welch import _check_not_constant, _prepare, welch_psd
+from rigtools.analysis.welch import prepare_welch, welch_psd
 from rigtools.analysis.windows import Segments, valid_segments
+from rigtools.errors import SignalError
+
+__all__ = ["band_rms", "mean_square_time", "rms_from_psd"]
 
 # --------------------------------------------------------------------------------------------
 # RMS
@@ -42,12 +46,12 @@ def rms_from_psd(spectrum: Spectrum, band_Hz: Sequence[float] | None = None) -> 
     numpy.float64 or numpy.ndarray
         RMS (``spectrum.unit``), with the batch shape of the spectrum.
     """
-    lo, hi = _check_band(band_Hz, spectrum.fs_Hz)
+    lo, hi = check_band(band_Hz, spectrum.fs_Hz)
     f = spectrum.freq_Hz
     sel = (f >= lo) & (f <= hi)
     psd = np.asarray(spectrum.psd_per_Hz)
     if psd.ndim > 1:  # frequency on the axis the time axis was on
-        psd = np.moveaxis(psd, _norm_axis(getattr(spectrum, "freq_axis", -1), psd.ndim), -1)
+        psd = np.moveaxis(psd, norm_axis(getattr(spectrum, "freq_axis", -1), psd.ndim), -1)
     ms = np.sum(psd[..., sel], axis=-1) * spectrum.resolution_Hz
     return np.sqrt(ms)[()]
 
@@ -63,8 +67,8 @@ def _detrended(seg: np.ndarray, detrend: Any) -> np.ndarray:
     return np.asarray(detrend(seg), np.float64)
 
 
-def _mean_square_time(x: np.ndarray, segs: Segments, rows: np.ndarray, fs: float,
-                      band: tuple[float, float], detrend: Any) -> tuple[np.ndarray, int]:
+def mean_square_time(x: np.ndarray, segs: Segments, rows: np.ndarray, fs: float,
+                     band: tuple[float, float], detrend: Any) -> tuple[np.ndarray, int]:
     """Sum over segments of the squares of the band-passed, detrended samples; sample count."""
     total = np.zeros(rows.size)
     full = band[0] <= 0.0 and band[1] >= fs / 2
@@ -135,11 +139,11 @@ def band_rms(x: Any, fs: float, band_Hz: Sequence[float] | None = None, *, valid
                               repr(fs))
         nperseg, noverlap = spectrum.nperseg, spectrum.noverlap
         window, detrend, resolution_Hz = spectrum.window, spectrum.detrend, None
-    xs, fs, mask, nps, nov, _, det, _ = _prepare(x, fs, valid, nperseg, resolution_Hz,
+    xs, fs, mask, nps, nov, _, det, _ = prepare_welch(x, fs, valid, nperseg, resolution_Hz,
                                                  noverlap, window, detrend, axis)
-    band = _check_band(band_Hz, fs)
+    band = check_band(band_Hz, fs)
     if spectrum is None:
-        _check_not_constant(xs, mask)
+        check_not_constant(xs, mask)
         spectrum = welch_psd(xs, fs, valid=None if mask is None else mask, unit=unit,
                              nperseg=nps, noverlap=nov, window=window, detrend=det)
     batch = xs.shape[:-1]
@@ -150,13 +154,13 @@ def band_rms(x: Any, fs: float, band_Hz: Sequence[float] | None = None, *, valid
     counts = np.zeros(m, np.int64)
     if mask is None or mask.ndim == 1:
         segs = valid_segments(mask if mask is not None else np.ones(n, bool), nps)
-        tot, cnt = _mean_square_time(x2, segs, np.arange(m), fs, band, det)
+        tot, cnt = mean_square_time(x2, segs, np.arange(m), fs, band, det)
         ms[:], counts[:] = tot / max(cnt, 1), cnt
     else:
         m2 = mask.reshape(-1, n)
         for i in range(m):
             segs = valid_segments(m2[i], nps)
-            tot, cnt = _mean_square_time(x2, segs, np.array([i]), fs, band, det)
+            tot, cnt = mean_square_time(x2, segs, np.array([i]), fs, band, det)
             ms[i], counts[i] = tot[0] / max(cnt, 1), cnt
     rms_p = rms_from_psd(spectrum, band)
     return BandRMS(band_Hz=band, rms_time=np.sqrt(ms).reshape(batch)[()],

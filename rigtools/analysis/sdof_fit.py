@@ -1,29 +1,38 @@
 """Damping of one PSD peak: half-power bandwidth and a single-DOF fit, with uncertainties.
 
 The estimators behind :mod:`rigtools.analysis.peaks` (see its docstring for the method and
-references): :func:`half_power_damping` and :func:`fit_sdof`.
+references): :func:`half_power_damping` and :func:`fit_sdof`, over the band-limited forms
+:func:`half_power_in_band` and :func:`fit_sdof_in_band` on a :class:`PSDContext`, which the
+peak analysis calls with its own bands and masks.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 from scipy.optimize import least_squares
+from scipy.special import polygamma
+from scipy.stats import chi2
 
-from rigtools.analysis.spectra import (
-    SignalError,
-    Spectrum,
-    log_chi2_stats,
-)
+from rigtools.analysis.signal_checks import RESPONSE_POWER, Response, check_response
+from rigtools.analysis.spectra import Spectrum, log_chi2_stats
+from rigtools.errors import SignalError
 
-__all__ = ["HalfPower", "SDOFFit", "fit_sdof", "half_power_damping"]
+__all__ = [
+    "HalfPower",
+    "PSDContext",
+    "SDOFFit",
+    "fit_sdof",
+    "fit_sdof_in_band",
+    "half_power_damping",
+    "half_power_in_band",
+    "mask_line",
+    "not_fitted",
+    "zeta_resolution",
+]
 
-
-Response = Literal["displacement", "velocity", "acceleration"]
-_RESPONSE_POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
 #: The half-power crossings are found on the PSD averaged over (half-power bandwidth / this)
 #: bins: enough to tame the chi-square scatter that biases the raw maximum high and the
 #: crossings inward, little enough to widen a SDOF peak by under 1 %.
@@ -124,7 +133,7 @@ class SDOFFit:
 # peak estimators
 
 
-class _PSDContext:
+class PSDContext:
     """The log PSD of one channel and the statistics of its estimate."""
 
     def __init__(self, spectrum: Spectrum) -> None:
@@ -143,7 +152,21 @@ class _PSDContext:
         self.props = spectrum.window_properties
         self.dof = float(np.asarray(spectrum.dof))
         self.bias, self.eps2 = log_chi2_stats(max(self.dof, 1.0))
-        self.rho2 = self.props.bin_correlation
+        # correlation of neighbouring bins of the averaged estimate: the window's own and
+        # that of overlapping windows (WindowProperties.averaged_bin_correlation)
+        account = spectrum.account
+        self.rho2 = self.props.averaged_bin_correlation(
+            spectrum.noverlap, int(np.asarray(account.n_windows)),
+            int(np.asarray(account.n_segments)))
+        #: Excess kurtosis of the log of a chi-square_nu / nu variable,
+        #: psi'''(nu/2) / psi'(nu/2)^2 (for the null distribution of the residuals).
+        self.log_kurtosis = float(polygamma(3, 0.5 * max(self.dof, 1.0)) / self.eps2**2)
+
+    def lag_matrix(self, idx: np.ndarray) -> np.ndarray:
+        """Correlation matrix of the PSD estimates at bins ``idx`` (from :attr:`rho2`)."""
+        lag = np.abs(idx[:, None] - idx[None, :])
+        return np.where(lag < self.rho2.size, self.rho2[np.minimum(lag, self.rho2.size - 1)],
+                        0.0)
 
     def rho(self, lag: int) -> float:
         """Correlation of the PSD estimates ``lag`` bins apart."""
@@ -186,7 +209,7 @@ class _PSDContext:
         return float(f[k] + delta * df), min(std, df), float(peak)
 
 
-def _smoothed_log(ctx: _PSDContext, mask: np.ndarray, m: int) -> np.ndarray:
+def _smoothed_log(ctx: PSDContext, mask: np.ndarray, m: int) -> np.ndarray:
     """Natural log of the m-bin moving average of the PSD over unmasked bins (NaN where none)."""
     if m <= 1:
         return np.where(mask, np.nan, ctx.lnP)
@@ -200,7 +223,7 @@ def _smoothed_log(ctx: _PSDContext, mask: np.ndarray, m: int) -> np.ndarray:
     return out
 
 
-def _half_power_pass(ctx: _PSDContext, k0: int, lo: int, hi: int, mask: np.ndarray, m: int
+def _half_power_pass(ctx: PSDContext, k0: int, lo: int, hi: int, mask: np.ndarray, m: int
                      ) -> HalfPower:
     f = ctx.f
     L = _smoothed_log(ctx, mask, m)
@@ -250,8 +273,13 @@ def _hp_missing(why: str) -> HalfPower:
     return HalfPower(nan, nan, nan, nan, message=why)
 
 
-def _half_power(ctx: _PSDContext, k0: int, lo: int, hi: int, mask: np.ndarray) -> HalfPower:
-    """Half-power bandwidth, on the PSD smoothed over about a sixth of the bandwidth."""
+def half_power_in_band(ctx: PSDContext, k0: int, lo: int, hi: int, mask: np.ndarray
+                       ) -> HalfPower:
+    """Half-power bandwidth of the peak at bin ``k0``, searched within bins ``[lo, hi]``.
+
+    Found on the PSD smoothed over about a sixth of the bandwidth; bins where ``mask`` is True
+    are skipped.
+    """
     raw = _half_power_pass(ctx, k0, lo, hi, mask, 1)
     if not np.isfinite(raw.zeta):
         return raw
@@ -275,8 +303,14 @@ def _sdof_shape(fe: np.ndarray, f_n: float, zeta: float, p: int
     return s, ds_f, ds_z
 
 
-def _fit_sdof(ctx: _PSDContext, k0: int, lo: int, hi: int, mask: np.ndarray, zeta0: float,
-              zeta_res: float, p: int, fit_span: float) -> SDOFFit:
+def fit_sdof_in_band(ctx: PSDContext, k0: int, lo: int, hi: int, mask: np.ndarray,
+                     zeta0: float, zeta_res: float, p: int, fit_span: float) -> SDOFFit:
+    """Fit the SDOF model to the peak at bin ``k0`` within bins ``[lo, hi]``, unmasked bins.
+
+    ``zeta0`` is the starting damping (the half-power one), ``zeta_res`` the resolution
+    equivalent, ``p`` the response power (:data:`~rigtools.analysis.signal_checks.RESPONSE_POWER`)
+    and ``fit_span`` the half-width of the band in half-power half-bandwidths.
+    """
     f, lnP, df = ctx.f, ctx.lnP, ctx.df
     f_pk, _, ln_pk = ctx.interpolate(k0)
     z0 = zeta0 if np.isfinite(zeta0) and zeta0 > 0 else zeta_res
@@ -381,7 +415,7 @@ def _fit_sdof(ctx: _PSDContext, k0: int, lo: int, hi: int, mask: np.ndarray, zet
         redchi2=redchi2, success=ok, at_lower_bound=at_low, message=msg)
 
 
-def _start_zetas(ctx: _PSDContext, k0: int, a: int, b: int, mask: np.ndarray
+def _start_zetas(ctx: PSDContext, k0: int, a: int, b: int, mask: np.ndarray
                  ) -> list[float]:
     """Starting dampings from the half-power width of the PSD smoothed over 3, 7, 15 bins."""
     out = []
@@ -392,19 +426,15 @@ def _start_zetas(ctx: _PSDContext, k0: int, a: int, b: int, mask: np.ndarray
     return out
 
 
-def _not_fitted(why: str) -> SDOFFit:
+def not_fitted(why: str) -> SDOFFit:
+    """An :class:`SDOFFit` that was not attempted, saying why."""
     nan = float("nan")
     return SDOFFit(nan, nan, nan, nan, nan, nan, (nan, nan), 0, nan, False, False, why)
 
 
-def _zeta_resolution(ctx: _PSDContext, f_Hz: float) -> float:
+def zeta_resolution(ctx: PSDContext, f_Hz: float) -> float:
+    r"""The damping a pure tone at ``f_Hz`` appears to have, :math:`B_{3dB} / (2 f)`."""
     return ctx.props.bandwidth_3dB_bins * ctx.df / (2 * max(f_Hz, ctx.df))
-
-def _check_response(response: str) -> int:
-    if response not in _RESPONSE_POWER:
-        raise SignalError("response", "'displacement', 'velocity' or 'acceleration'",
-                          repr(response))
-    return _RESPONSE_POWER[response]
 
 
 def half_power_damping(spectrum: Spectrum, f_Hz: float) -> HalfPower:
@@ -421,9 +451,9 @@ def half_power_damping(spectrum: Spectrum, f_Hz: float) -> HalfPower:
     -------
     HalfPower
     """
-    ctx = _PSDContext(spectrum)
+    ctx = PSDContext(spectrum)
     k0 = _local_max(ctx, f_Hz)
-    return _half_power(ctx, k0, 1, ctx.f.size - 2, np.zeros(ctx.f.size, bool))
+    return half_power_in_band(ctx, k0, 1, ctx.f.size - 2, np.zeros(ctx.f.size, bool))
 
 
 def fit_sdof(spectrum: Spectrum, f_Hz: float, *, response: Response = "displacement",
@@ -449,19 +479,19 @@ def fit_sdof(spectrum: Spectrum, f_Hz: float, *, response: Response = "displacem
     -------
     SDOFFit
     """
-    p = _check_response(response)
-    ctx = _PSDContext(spectrum)
+    p = check_response(response)
+    ctx = PSDContext(spectrum)
     k0 = _local_max(ctx, f_Hz)
     mask = np.zeros(ctx.f.size, bool)
     for fx in exclude_Hz:
-        _mask_line(ctx, round(fx / ctx.df), mask)
+        mask_line(ctx, round(fx / ctx.df), mask)
     mask[k0] = False
-    hp = _half_power(ctx, k0, 1, ctx.f.size - 2, mask)
-    zres = _zeta_resolution(ctx, ctx.f[k0])
-    return _fit_sdof(ctx, k0, 1, ctx.f.size - 2, mask, hp.zeta, zres, p, fit_span)
+    hp = half_power_in_band(ctx, k0, 1, ctx.f.size - 2, mask)
+    zres = zeta_resolution(ctx, ctx.f[k0])
+    return fit_sdof_in_band(ctx, k0, 1, ctx.f.size - 2, mask, hp.zeta, zres, p, fit_span)
 
 
-def _local_max(ctx: _PSDContext, f_Hz: float) -> int:
+def _local_max(ctx: PSDContext, f_Hz: float) -> int:
     k = round(float(f_Hz) / ctx.df)
     if not 1 <= k <= ctx.f.size - 2:
         raise SignalError("f_Hz", f"inside (0, {ctx.f[-1]:g}) Hz", repr(f_Hz))
@@ -469,7 +499,7 @@ def _local_max(ctx: _PSDContext, f_Hz: float) -> int:
     return a + int(np.argmax(ctx.lnP[a: b + 1]))
 
 
-def _mask_line(ctx: _PSDContext, k: int, mask: np.ndarray) -> None:
+def mask_line(ctx: PSDContext, k: int, mask: np.ndarray) -> None:
     """Mask a line at bin k: its main lobe and one bin more, further while the PSD falls."""
     n = ctx.f.size
     if not 0 <= k < n:

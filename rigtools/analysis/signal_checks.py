@@ -1,19 +1,62 @@
-"""Errors and argument checks shared by the spectral analyses.
+"""Argument types and the argument checks shared by the analyses of :mod:`rigtools.analysis`.
 
-:class:`SignalError` and its subclasses :class:`InsufficientDataError` and
-:class:`ConstantSignalError`, the ``Window``/``Detrend``/``Average`` argument types, the
-default window length, and the private validation helpers (signal, sample rate, mask, window
-length, overlap, detrend, band, axis) used by the Welch, RMS and recording analyses.
+Validate once, at the boundary (STYLE.md 3.7): each check is named after the argument it
+checks, returns the normalised value and names the argument in backticks with what was
+expected and what was received. Two families:
+
+* the spectral analyses (Welch, RMS, peaks, a recording's channels) raise
+  :class:`~rigtools.errors.SignalError`: :func:`as_signal`, :func:`check_fs`,
+  :func:`check_valid`, :func:`resolve_nperseg`, :func:`check_noverlap`, :func:`check_detrend`,
+  :func:`check_band`, :func:`check_not_constant`, :func:`check_response`, with
+  :func:`row_name` and :func:`norm_axis`;
+* the speed and order analyses (speed profiles, tacho, angular resampling, order spectra)
+  raise :class:`ValueError` (and :class:`~rigtools.errors.MissingSpeedError` for a missing
+  speed): :func:`as_1d`, :func:`check_positive`, :func:`check_sample_rate`,
+  :func:`check_valid_1d`, :func:`check_int`, :func:`check_speed`, :func:`check_harmonics`,
+  :func:`check_quantity`.
+
+Also the argument types ``Window``, ``Detrend``, ``Average``, ``Response``, ``Quantity`` and the
+default Welch window length.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Any, Literal
+from typing import Any, Final, Literal
 
 import numpy as np
 
-from rigtools.errors import RigtoolsError
+from rigtools.analysis.speed_types import SpeedProfile
+from rigtools.errors import ConstantSignalError, MissingSpeedError, SignalError
+
+__all__ = [
+    "DEFAULT_NPERSEG",
+    "RESPONSE_POWER",
+    "Average",
+    "Detrend",
+    "Quantity",
+    "Response",
+    "Window",
+    "as_1d",
+    "as_signal",
+    "check_band",
+    "check_detrend",
+    "check_fs",
+    "check_harmonics",
+    "check_int",
+    "check_not_constant",
+    "check_noverlap",
+    "check_positive",
+    "check_quantity",
+    "check_response",
+    "check_sample_rate",
+    "check_speed",
+    "check_valid",
+    "check_valid_1d",
+    "norm_axis",
+    "resolve_nperseg",
+    "row_name",
+]
 
 #: Window length used when neither ``nperseg`` nor ``resolution_Hz`` is given (samples).
 DEFAULT_NPERSEG = 4096
@@ -21,69 +64,19 @@ DEFAULT_NPERSEG = 4096
 Window = str | tuple[Any, ...] | np.ndarray
 Detrend = Literal["constant", "linear", False] | Callable[[np.ndarray], np.ndarray]
 Average = Literal["mean", "median"]
+#: The response a single-DOF fit assumes: displacement, velocity or acceleration.
+Response = Literal["displacement", "velocity", "acceleration"]
+#: Power p of the frequency ratio in the SDOF PSD shape, per response.
+RESPONSE_POWER: Final[dict[str, int]] = {"displacement": 0, "velocity": 1, "acceleration": 2}
+#: What an order analysis reports: the input as given, or converted to displacement.
+Quantity = Literal["acceleration", "displacement"]
 
 
 # --------------------------------------------------------------------------------------------
-# errors
+# spectral analyses (SignalError)
 
 
-class SignalError(RigtoolsError, ValueError):
-    """A signal cannot be analysed as asked.
-
-    Parameters
-    ----------
-    argument : str
-        The argument (or array row, ``"x[2]"``) at fault.
-    expected, found : str, optional
-        What was expected and what was received; the message reads
-        ``` `argument` must be <expected>, was <found>```.
-    detail : str, optional
-        Free text; alone it reads ``` `argument` <detail>```.
-    channel : str, optional
-        Channel name, prefixed to the message.
-    """
-
-    def __init__(self, argument: str, expected: str | None = None, found: str | None = None,
-                 detail: str | None = None, channel: str | None = None) -> None:
-        self.argument = argument
-        self.expected = expected
-        self.found = found
-        self.detail = detail
-        self.channel = channel
-        super().__init__(str(self))
-
-    def __str__(self) -> str:
-        head = f"channel {self.channel!r}: " if self.channel is not None else ""
-        if self.expected is not None:
-            msg = f"`{self.argument}` must be {self.expected}, was {self.found}"
-            if self.detail:
-                msg += f" ({self.detail})"
-        else:
-            msg = f"`{self.argument}` {self.detail or 'cannot be analysed'}"
-        return head + msg
-
-    def __reduce__(self) -> tuple[Any, ...]:
-        return (type(self), (self.argument, self.expected, self.found, self.detail,
-                             self.channel))
-
-    def for_channel(self, channel: str) -> SignalError:
-        """The same error, naming ``channel``."""
-        return type(self)(self.argument, self.expected, self.found, self.detail, channel)
-
-
-class InsufficientDataError(SignalError):
-    """The signal (or its longest valid segment) is too short for the requested resolution."""
-
-
-class ConstantSignalError(SignalError):
-    """Every valid sample has the same value: there is no spectrum to analyse."""
-
-
-# --------------------------------------------------------------------------------------------
-# validation helpers
-
-
-def _as_signal(x: Any, axis: int) -> np.ndarray:
+def as_signal(x: Any, axis: int) -> np.ndarray:
     """``x`` as float32/float64 with the time axis last."""
     a = np.asarray(x)
     if a.ndim == 0:
@@ -98,14 +91,15 @@ def _as_signal(x: Any, axis: int) -> np.ndarray:
         raise SignalError("axis", f"in [-{a.ndim}, {a.ndim})", str(axis)) from e
 
 
-def _check_fs(fs: float) -> float:
+def check_fs(fs: float) -> float:
+    """The sample rate ``fs`` (Hz) as a float when finite and > 0."""
     fs = float(fs)
     if not np.isfinite(fs) or fs <= 0:
         raise SignalError("fs", "a finite positive sample rate (Hz)", repr(fs))
     return fs
 
 
-def _check_valid(valid: Any, x: np.ndarray, axis: int) -> np.ndarray | None:
+def check_valid(valid: Any, x: np.ndarray, axis: int) -> np.ndarray | None:
     """The mask, time axis last, shape ``(n,)`` or ``x.shape``; None when every sample is valid.
 
     Without a mask, the finite samples are the valid ones. With one, samples marked valid must
@@ -135,7 +129,8 @@ def _check_valid(valid: Any, x: np.ndarray, axis: int) -> np.ndarray | None:
     return v
 
 
-def _resolve_nperseg(nperseg: int | None, resolution_Hz: float | None, fs: float) -> int:
+def resolve_nperseg(nperseg: int | None, resolution_Hz: float | None, fs: float) -> int:
+    """Window length (samples): ``nperseg``, or ``ceil(fs / resolution_Hz)``, or the default."""
     if nperseg is not None and resolution_Hz is not None:
         raise SignalError("resolution_Hz", "None when `nperseg` is given", repr(resolution_Hz))
     if resolution_Hz is not None:
@@ -150,7 +145,8 @@ def _resolve_nperseg(nperseg: int | None, resolution_Hz: float | None, fs: float
     return int(nperseg)
 
 
-def _check_noverlap(noverlap: int | None, nperseg: int) -> int:
+def check_noverlap(noverlap: int | None, nperseg: int) -> int:
+    """Overlap (samples) in ``[0, nperseg)``; default half a window."""
     if noverlap is None:
         return nperseg // 2
     if int(noverlap) != noverlap or not 0 <= noverlap < nperseg:
@@ -158,13 +154,18 @@ def _check_noverlap(noverlap: int | None, nperseg: int) -> int:
     return int(noverlap)
 
 
-def _check_detrend(detrend: Any) -> Any:
+def check_detrend(detrend: Any) -> Any:
+    """``detrend`` when it is ``'constant'``, ``'linear'``, False or a callable."""
     if detrend is False or callable(detrend) or detrend in ("constant", "linear"):
         return detrend
     raise SignalError("detrend", "'constant', 'linear', False or a callable", repr(detrend))
 
 
-def _check_band(band_Hz: Sequence[float] | None, fs: float) -> tuple[float, float]:
+def check_band(band_Hz: Sequence[float] | None, fs: float) -> tuple[float, float]:
+    """``(f_lo, f_hi)`` (Hz) with ``0 <= f_lo < f_hi``, ``f_hi`` capped at ``fs / 2``.
+
+    None gives the full band ``(0, fs / 2)``.
+    """
     if band_Hz is None:
         return (0.0, fs / 2)
     try:
@@ -176,10 +177,112 @@ def _check_band(band_Hz: Sequence[float] | None, fs: float) -> tuple[float, floa
     return (lo, min(hi, fs / 2))
 
 
-def _row_name(i: tuple[Any, ...], batch: tuple[int, ...]) -> str:
+def row_name(i: tuple[Any, ...], batch: tuple[int, ...]) -> str:
+    """How a row of a batch is named in messages: ``"x"`` or ``"x[2, 0]"``."""
     return "x" if not batch else "x[" + ", ".join(str(j) for j in i) + "]"
 
 
-def _norm_axis(axis: int, ndim: int) -> int:
+def norm_axis(axis: int, ndim: int) -> int:
     """``axis`` in [0, ndim) (-1 when ndim is 0)."""
     return int(axis) % ndim if ndim else -1
+
+
+def check_not_constant(x: np.ndarray, mask: np.ndarray | None) -> None:
+    """Raise :class:`ConstantSignalError` for the first row of ``x`` whose valid samples are equal.
+
+    ``x`` has the time axis last; ``mask`` is None, ``(n,)`` or ``x.shape``.
+    """
+    batch = x.shape[:-1]
+    x2 = x.reshape(-1, x.shape[-1])
+    if mask is None:
+        hi, lo = x2.max(axis=-1), x2.min(axis=-1)
+    else:
+        m2 = np.broadcast_to(mask, x.shape).reshape(x2.shape)
+        hi = np.where(m2, x2, -np.inf).max(axis=-1)
+        lo = np.where(m2, x2, np.inf).min(axis=-1)
+    for i in np.flatnonzero(hi == lo):
+        idx = np.unravel_index(int(i), batch)
+        nv = int(x2.shape[-1] if mask is None else np.count_nonzero(
+            np.broadcast_to(mask, x.shape).reshape(x2.shape)[i]))
+        raise ConstantSignalError(
+            row_name(idx, batch), detail=f"is constant (all {nv} valid samples equal "
+            f"{float(hi[i])!r}): its spectrum is zero, no peak or damping can be estimated")
+
+
+def check_response(response: str) -> int:
+    """The power p of ``response`` (:data:`RESPONSE_POWER`); SignalError for another value."""
+    if response not in RESPONSE_POWER:
+        raise SignalError("response", "'displacement', 'velocity' or 'acceleration'",
+                          repr(response))
+    return RESPONSE_POWER[response]
+
+
+# --------------------------------------------------------------------------------------------
+# speed and order analyses (ValueError)
+
+
+def as_1d(name: str, x: Any) -> np.ndarray:
+    """``x`` as a one-dimensional float64 array; ValueError naming ``name`` otherwise."""
+    a = np.asarray(x, dtype=np.float64)
+    if a.ndim != 1:
+        raise ValueError(f"`{name}` must be one-dimensional, has shape {a.shape}")
+    return a
+
+
+def check_positive(name: str, value: float) -> float:
+    """``value`` as a float when it is finite and > 0; ValueError naming ``name`` otherwise."""
+    v = float(value)
+    if not np.isfinite(v) or v <= 0.0:
+        raise ValueError(f"`{name}` must be a positive finite number, was {value!r}")
+    return v
+
+
+def check_sample_rate(sample_rate_Hz: float) -> float:
+    """``sample_rate_Hz`` (Hz) when finite and > 0."""
+    return check_positive("sample_rate_Hz", sample_rate_Hz)
+
+
+def check_valid_1d(valid: Any, n: int) -> np.ndarray:
+    """Per-sample validity of shape ``(n,)`` (all True when ``valid`` is None)."""
+    if valid is None:
+        return np.ones(n, dtype=bool)
+    v = np.asarray(valid, dtype=bool)
+    if v.shape != (n,):
+        raise ValueError(f"`valid` must have shape ({n},) like the values, has {v.shape}")
+    return v
+
+
+def check_int(name: str, value: Any, minimum: int = 1) -> int:
+    """``value`` as an int when it is an integer >= ``minimum`` (not a bool)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
+        raise ValueError(f"`{name}` must be an integer >= {minimum}, was {value!r}")
+    return int(value)
+
+
+def check_speed(speed: SpeedProfile | None) -> SpeedProfile:
+    """``speed`` when it is a :class:`SpeedProfile`; MissingSpeedError when None."""
+    if speed is None:
+        raise MissingSpeedError(None, detail="`speed` is None; build one with "
+                                "speed_from_slow_signal, speed_from_tacho or speed_profile")
+    if not isinstance(speed, SpeedProfile):
+        raise TypeError(f"`speed` must be a SpeedProfile, was {type(speed).__name__}")
+    return speed
+
+
+def check_harmonics(harmonics: int | Sequence[int]) -> tuple[int, ...]:
+    """Harmonic numbers: a count ``n`` (1 .. n) or a sequence of integers >= 1."""
+    if isinstance(harmonics, (int, np.integer)):
+        n = check_int("harmonics", harmonics)
+        return tuple(range(1, n + 1))
+    hs = tuple(int(h) for h in harmonics)
+    if not hs or any(h < 1 or isinstance(h, bool) for h in harmonics):
+        raise ValueError(f"`harmonics` must be a count or a sequence of integers >= 1, "
+                         f"was {harmonics!r}")
+    return hs
+
+
+def check_quantity(quantity: str) -> str:
+    """``quantity`` when it is ``"acceleration"`` or ``"displacement"``."""
+    if quantity not in ("acceleration", "displacement"):
+        raise ValueError(f"`quantity` must be 'acceleration' or 'displacement', was {quantity!r}")
+    return quantity

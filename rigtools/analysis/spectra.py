@@ -38,24 +38,8 @@ from typing import Any
 import numpy as np
 from scipy.special import polygamma
 
-from rigtools.analysis.rms import _mean_square_time as _mean_square_time
 from rigtools.analysis.rms import band_rms, rms_from_psd
-from rigtools.analysis.signal_checks import DEFAULT_NPERSEG as DEFAULT_NPERSEG
-from rigtools.analysis.signal_checks import Average as Average
-from rigtools.analysis.signal_checks import (
-    ConstantSignalError,
-    InsufficientDataError,
-    SignalError,
-)
-from rigtools.analysis.signal_checks import Detrend as Detrend
-from rigtools.analysis.signal_checks import Window as Window
-from rigtools.analysis.signal_checks import _check_band as _check_band
-from rigtools.analysis.signal_checks import _check_detrend as _check_detrend
-from rigtools.analysis.signal_checks import _check_fs as _check_fs
-from rigtools.analysis.signal_checks import _check_noverlap as _check_noverlap
-from rigtools.analysis.signal_checks import _resolve_nperseg as _resolve_nperseg
 from rigtools.analysis.spectral_window import WindowProperties, window_properties
-from rigtools.analysis.spectral_window import _window_array as _window_array
 from rigtools.analysis.spectrum_results import (
     AmplitudeSpectrum,
     BandRMS,
@@ -63,8 +47,8 @@ from rigtools.analysis.spectrum_results import (
     Spectrum,
     WelchAccount,
 )
-from rigtools.analysis.welch import _welch_core as _welch_core
 from rigtools.analysis.welch import amplitude_spectrum, welch_psd
+from rigtools.errors import ConstantSignalError, InsufficientDataError, SignalError
 
 __all__ = [
     "AmplitudeSpectrum",

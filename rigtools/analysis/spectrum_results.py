@@ -14,6 +14,8 @@ import numpy as np
 from rigtools.analysis.signal_checks import Window
 from rigtools.analysis.spectral_window import WindowProperties, window_properties
 
+__all__ = ["AmplitudeSpectrum", "BandRMS", "Clipping", "Spectrum", "WelchAccount"]
+
 # --------------------------------------------------------------------------------------------
 # results
 

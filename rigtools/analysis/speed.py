@@ -18,13 +18,10 @@ A speed reaches rigtools in one of two forms:
 Both give a :class:`SpeedProfile`: knots ``(time_s, speed_rpm)`` in one or more segments,
 linear between the knots of a segment, unknown between segments.
 
-The mesh frequency of a gear with ``z`` teeth on the shaft turning at ``n`` rpm is
-
-.. math::
-
-    f_m = \frac{z\,n}{60}
-
-(ISO 21771 / any gear text; seed 003 Sec. 4: 600-4100 rpm with z = 50 gives 500-3400 Hz).
+The mesh frequency of a gear with ``z`` teeth on the shaft turning at ``n`` rpm,
+:math:`f_m = z n / 60` (ISO 21771 / any gear text; seed 003 Sec. 4: 600-4100 rpm with z = 50
+gives 500-3400 Hz), is :func:`models.geometry.mesh_frequency_Hz`, the one place rigtools and
+models compute it, re-exported here as :func:`mesh_frequency_Hz`.
 
 Steps of a stepped run-up are plateaus of the speed (:func:`detect_speed_steps`): maximal
 stretches lasting at least ``min_duration_s`` in which every knot lies within the stability
@@ -38,9 +35,8 @@ Errors
     RigtoolsError
     └── MissingSpeedError (LookupError)   no speed signal, or none covering the data analysed
 
-:class:`MissingSpeedError` is defined in :mod:`rigtools.analysis.speed_types` and re-exported
-here (rigtools.errors has no speed error); it carries
-``name``, ``available`` and ``detail`` and survives pickling.
+:class:`MissingSpeedError` is defined in :mod:`rigtools.errors` and re-exported here; it
+carries ``name``, ``available`` and ``detail`` and survives pickling.
 """
 
 from __future__ import annotations
@@ -49,19 +45,12 @@ from typing import Any
 
 import numpy as np
 
+from models.geometry import mesh_frequency_Hz
+from rigtools.analysis.signal_checks import as_1d, check_positive
 from rigtools.analysis.speed_steps import detect_speed_steps
-from rigtools.analysis.speed_types import (
-    MissingSpeedError,
-    SpeedProfile,
-    SpeedStep,
-    _as_1d,
-    _check_positive,
-    _check_teeth,
-)
-from rigtools.analysis.speed_types import _check_fs as _check_fs  # re-export
-from rigtools.analysis.speed_types import _check_valid as _check_valid  # re-export
-from rigtools.analysis.speed_types import _runs as _runs  # re-export
+from rigtools.analysis.speed_types import SpeedProfile, SpeedStep
 from rigtools.analysis.tacho import speed_from_tacho, tacho_edges
+from rigtools.errors import MissingSpeedError
 from rigtools.ingest.recording import Recording
 
 __all__ = [
@@ -99,33 +88,6 @@ def _rpm_factor(unit: str) -> float:
             f"`unit` must be a speed unit ({', '.join(sorted(_RPM_PER_UNIT))}), was {unit!r}"
         )
     return _RPM_PER_UNIT[key]
-
-
-# --- mesh frequency ---------------------------------------------------------------------------
-def mesh_frequency_Hz(speed_rpm: np.ndarray | float, z1: int) -> np.ndarray:  # noqa: N802
-    r"""Mesh frequency of a gear of ``z1`` teeth on a shaft turning at ``speed_rpm``.
-
-    Parameters
-    ----------
-    speed_rpm : array_like
-        Shaft speed (rpm).
-    z1 : int
-        Teeth of the gear on that shaft (the pinion's z1 for the pinion speed).
-
-    Returns
-    -------
-    numpy.ndarray
-        :math:`f_m = z_1 n_1 / 60` (Hz).
-
-    Examples
-    --------
-    >>> float(mesh_frequency_Hz(1500.0, 16))  # FZG type C pinion, rigtools.demo
-    400.0
-    >>> float(mesh_frequency_Hz(600.0, 50))   # Kahraman-Blankenship gears, seed 003 Sec. 4
-    500.0
-    """
-    z = _check_teeth(z1)
-    return np.asarray(speed_rpm, dtype=np.float64) * z / 60.0
 
 
 # --- slow signal ------------------------------------------------------------------------------
@@ -167,8 +129,8 @@ def speed_from_slow_signal(
     MissingSpeedError
         When no finite sample remains.
     """
-    t = _as_1d("time_s", time_s)
-    v = _as_1d("values", values)
+    t = as_1d("time_s", time_s)
+    v = as_1d("values", values)
     if t.shape != v.shape:
         raise ValueError(f"`time_s` and `values` must have the same shape, have {t.shape} "
                          f"and {v.shape}")
@@ -186,7 +148,7 @@ def speed_from_slow_signal(
     t, rpm = t[last], rpm[last]
     dt = np.diff(t)
     median_dt = float(np.median(dt)) if dt.size else 0.0
-    gap = 5.0 * median_dt if max_gap_s is None else _check_positive("max_gap_s", max_gap_s)
+    gap = 5.0 * median_dt if max_gap_s is None else check_positive("max_gap_s", max_gap_s)
     hold = median_dt if hold_s is None else float(hold_s)
     if hold < 0 or not np.isfinite(hold):
         raise ValueError(f"`hold_s` must be a finite number >= 0, was {hold_s!r}")

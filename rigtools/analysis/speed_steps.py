@@ -13,12 +13,11 @@ from typing import Any
 
 import numpy as np
 
-from rigtools.analysis.speed_types import (
-    MissingSpeedError,
-    SpeedProfile,
-    SpeedStep,
-    _check_positive,
-)
+from rigtools.analysis.signal_checks import check_positive
+from rigtools.analysis.speed_types import SpeedProfile, SpeedStep
+from rigtools.errors import MissingSpeedError
+
+__all__ = ["detect_speed_steps"]
 
 
 # --- steps ------------------------------------------------------------------------------------
@@ -96,7 +95,7 @@ def detect_speed_steps(
                          f"{abs_tolerance_rpm!r}")
     if rel == 0 and abs_tol == 0:
         raise ValueError("`rel_tolerance` and `abs_tolerance_rpm` cannot both be 0")
-    dur = _check_positive("min_duration_s", min_duration_s)
+    dur = check_positive("min_duration_s", min_duration_s)
 
     def tol(n: np.ndarray | float) -> np.ndarray:
         return np.maximum(abs_tol, rel * np.abs(n))

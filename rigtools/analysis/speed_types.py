@@ -1,55 +1,18 @@
-"""Speed data types, the missing-speed error and the argument checks shared by the speed modules.
+"""Speed data types: a shaft speed over time and the plateaus of a stepped run-up.
 
-Holds :class:`MissingSpeedError`, :class:`SpeedProfile` (knots in segments, linear between
-knots of a segment) and :class:`SpeedStep` (one plateau of a stepped run-up), plus the small
-private validators (``_as_1d``, ``_check_positive``, ``_check_fs``, ``_check_valid``,
-``_check_teeth``) and ``_runs`` that the speed, tacho, resampling and order modules use.
-The public names are re-exported by :mod:`rigtools.analysis.speed`.
+:class:`SpeedProfile` (knots in segments, linear between knots of a segment) and
+:class:`SpeedStep` (one plateau of a stepped run-up), re-exported by
+:mod:`rigtools.analysis.speed`. Their argument checks are in
+:mod:`rigtools.analysis.signal_checks`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
-from rigtools.errors import RigtoolsError
-
-
-class MissingSpeedError(RigtoolsError, LookupError):
-    """Order analysis needs a shaft speed that is absent or covers none of the data.
-
-    Parameters
-    ----------
-    name : str or None
-        The speed signal asked for (``None`` when none was given).
-    available : sequence of str
-        Slow signals and channels the recording does hold.
-    detail : str or None
-        What exactly is missing.
-    """
-
-    def __init__(
-        self, name: str | None, available: Sequence[str] = (), detail: str | None = None
-    ) -> None:
-        self.name = name
-        self.available = tuple(available)
-        self.detail = detail
-        super().__init__(str(self))
-
-    def __str__(self) -> str:
-        what = f"speed signal {self.name!r}" if self.name is not None else "a speed signal"
-        msg = f"order analysis needs {what}"
-        if self.detail:
-            msg += f": {self.detail}"
-        if self.available:
-            msg += f" (the recording holds: {', '.join(sorted(self.available))})"
-        return msg
-
-    def __reduce__(self) -> tuple[Any, ...]:
-        return (type(self), (self.name, self.available, self.detail))
+__all__ = ["SpeedProfile", "SpeedStep"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -146,46 +109,3 @@ class SpeedStep:
     def duration_s(self) -> float:
         """``stop_s - start_s`` (s)."""
         return self.stop_s - self.start_s
-
-
-# --- validation -------------------------------------------------------------------------------
-def _as_1d(name: str, x: Any) -> np.ndarray:
-    a = np.asarray(x, dtype=np.float64)
-    if a.ndim != 1:
-        raise ValueError(f"`{name}` must be one-dimensional, has shape {a.shape}")
-    return a
-
-
-def _check_positive(name: str, value: float) -> float:
-    v = float(value)
-    if not np.isfinite(v) or v <= 0.0:
-        raise ValueError(f"`{name}` must be a positive finite number, was {value!r}")
-    return v
-
-
-def _check_fs(sample_rate_Hz: float) -> float:
-    return _check_positive("sample_rate_Hz", sample_rate_Hz)
-
-
-def _check_valid(valid: Any, n: int) -> np.ndarray:
-    if valid is None:
-        return np.ones(n, dtype=bool)
-    v = np.asarray(valid, dtype=bool)
-    if v.shape != (n,):
-        raise ValueError(f"`valid` must have shape ({n},) like the values, has {v.shape}")
-    return v
-
-
-def _check_teeth(z1: int) -> int:
-    if isinstance(z1, bool) or int(z1) != z1 or int(z1) < 1:
-        raise ValueError(f"`z1` must be a positive integer number of teeth, was {z1!r}")
-    return int(z1)
-
-
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """Half-open index ranges ``[a, b)`` of consecutive ``True`` in ``mask``."""
-    m = np.r_[False, mask, False].astype(np.int8)
-    d = np.diff(m)
-    starts = np.flatnonzero(d == 1)
-    stops = np.flatnonzero(d == -1)
-    return list(zip(starts.tolist(), stops.tolist(), strict=True))

@@ -11,14 +11,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigtools.analysis.speed_types import (
-    MissingSpeedError,
-    SpeedProfile,
-    _as_1d,
-    _check_fs,
-    _check_valid,
-    _runs,
-)
+from rigtools.analysis.signal_checks import as_1d, check_sample_rate, check_valid_1d
+from rigtools.analysis.speed_types import SpeedProfile
+from rigtools.analysis.windows import true_runs
+from rigtools.errors import MissingSpeedError
+
+__all__ = ["speed_from_tacho", "tacho_edges"]
 
 
 def _edges_in_run(x: np.ndarray, lo: float, mid: float, hi: float) -> np.ndarray:
@@ -84,9 +82,9 @@ def tacho_edges(
     run : numpy.ndarray
         For each edge, the number of the gap-free run it lies in (int).
     """
-    x = _as_1d("values", values)
-    fs = _check_fs(sample_rate_Hz)
-    ok = _check_valid(valid, x.size) & np.isfinite(x)
+    x = as_1d("values", values)
+    fs = check_sample_rate(sample_rate_Hz)
+    ok = check_valid_1d(valid, x.size) & np.isfinite(x)
     if not np.any(ok):
         return np.empty(0), np.empty(0, dtype=np.int64)
     p5, p95 = np.percentile(x[ok], [5.0, 95.0])
@@ -95,7 +93,7 @@ def tacho_edges(
     if not np.isfinite(hyst) or hyst < 0:
         raise ValueError(f"`hysteresis` must be a finite number >= 0, was {hysteresis!r}")
     times, runs = [], []
-    for r, (a, b) in enumerate(_runs(ok)):
+    for r, (a, b) in enumerate(true_runs(ok)):
         e = _edges_in_run(x[a:b], mid - hyst / 2, mid, mid + hyst / 2)
         times.append(start_time_s + (a + e) / fs)
         runs.append(np.full(e.size, r, dtype=np.int64))

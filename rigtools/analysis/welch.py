@@ -1,7 +1,8 @@
 """Welch estimation over the valid segments of a gapped signal.
 
-The private core (``_welch_core``, equivalent degrees of freedom, median bias, signal
-preparation) and the public :func:`welch_psd` and :func:`amplitude_spectrum`. Windows are laid
+The public :func:`welch_psd` and :func:`amplitude_spectrum`, and the machinery they share with
+the RMS and recording analyses: :func:`prepare_welch` (argument checks and the window) and
+:func:`welch_core` (the estimate over the valid segments, with its account). Windows are laid
 inside each valid segment, never across a gap.
 """
 
@@ -14,23 +15,24 @@ from scipy import signal as sps
 
 from rigtools.analysis.signal_checks import (
     Average,
-    ConstantSignalError,
     Detrend,
-    InsufficientDataError,
-    SignalError,
     Window,
-    _as_signal,
-    _check_detrend,
-    _check_fs,
-    _check_noverlap,
-    _check_valid,
-    _norm_axis,
-    _resolve_nperseg,
-    _row_name,
+    as_signal,
+    check_detrend,
+    check_fs,
+    check_not_constant,
+    check_noverlap,
+    check_valid,
+    norm_axis,
+    resolve_nperseg,
+    row_name,
 )
-from rigtools.analysis.spectral_window import WindowProperties, _window_array, window_properties
+from rigtools.analysis.spectral_window import WindowProperties, window_array, window_properties
 from rigtools.analysis.spectrum_results import AmplitudeSpectrum, Spectrum, WelchAccount
 from rigtools.analysis.windows import Segments, n_windows, valid_segments
+from rigtools.errors import InsufficientDataError, SignalError
+
+__all__ = ["amplitude_spectrum", "prepare_welch", "welch_core", "welch_psd"]
 
 # --------------------------------------------------------------------------------------------
 # Welch over valid segments
@@ -63,7 +65,7 @@ def _longest_run(mask: np.ndarray | None, n: int) -> int:
     return int(s.lengths.max()) if s.n_kept else 0
 
 
-def _welch_core(x: np.ndarray, mask: np.ndarray | None, fs: float, w: np.ndarray,
+def welch_core(x: np.ndarray, mask: np.ndarray | None, fs: float, w: np.ndarray,
                 nperseg: int, noverlap: int, detrend: Any, average: str, scaling: str,
                 props: WindowProperties) -> tuple[np.ndarray, np.ndarray, WelchAccount,
                                                   list[Segments]]:
@@ -101,7 +103,7 @@ def _welch_core(x: np.ndarray, mask: np.ndarray | None, fs: float, w: np.ndarray
         segs = valid_segments(gmask if gmask is not None else np.ones(n, bool), nperseg)
         seg_list.append(segs)
         if segs.n_kept == 0:
-            names = ", ".join(_row_name(np.unravel_index(int(r), batch), batch)
+            names = ", ".join(row_name(np.unravel_index(int(r), batch), batch)
                               for r in rows[:4])
             longest = _longest_run(gmask, n)
             raise InsufficientDataError(
@@ -141,40 +143,29 @@ def _welch_core(x: np.ndarray, mask: np.ndarray | None, fs: float, w: np.ndarray
     return freq, P.reshape(*batch, nf), account, seg_list
 
 
-def _check_not_constant(x: np.ndarray, mask: np.ndarray | None) -> None:
-    batch = x.shape[:-1]
-    x2 = x.reshape(-1, x.shape[-1])
-    if mask is None:
-        hi, lo = x2.max(axis=-1), x2.min(axis=-1)
-    else:
-        m2 = np.broadcast_to(mask, x.shape).reshape(x2.shape)
-        hi = np.where(m2, x2, -np.inf).max(axis=-1)
-        lo = np.where(m2, x2, np.inf).min(axis=-1)
-    for i in np.flatnonzero(hi == lo):
-        idx = np.unravel_index(int(i), batch)
-        nv = int(x2.shape[-1] if mask is None else np.count_nonzero(
-            np.broadcast_to(mask, x.shape).reshape(x2.shape)[i]))
-        raise ConstantSignalError(
-            _row_name(idx, batch), detail=f"is constant (all {nv} valid samples equal "
-            f"{float(hi[i])!r}): its spectrum is zero, no peak or damping can be estimated")
+def prepare_welch(x: Any, fs: float, valid: Any, nperseg: int | None,
+                  resolution_Hz: float | None, noverlap: int | None, window: Window,
+                  detrend: Any, axis: int
+                  ) -> tuple[np.ndarray, float, np.ndarray | None, int, int, np.ndarray, Any,
+                             WindowProperties]:
+    """Check the arguments of a Welch estimate, as :func:`welch_psd` takes them.
 
-
-def _prepare(x: Any, fs: float, valid: Any, nperseg: int | None, resolution_Hz: float | None,
-             noverlap: int | None, window: Window, detrend: Any, axis: int
-             ) -> tuple[np.ndarray, float, np.ndarray | None, int, int, np.ndarray, Any,
-                        WindowProperties]:
-    xs = _as_signal(x, axis)
-    fs = _check_fs(fs)
-    nps = _resolve_nperseg(nperseg, resolution_Hz, fs)
+    Returns the signal with the time axis last, the sample rate (Hz), the validity mask (None
+    when every sample is valid), ``nperseg``, ``noverlap``, the window's samples, the detrend
+    and the window's :class:`WindowProperties`.
+    """
+    xs = as_signal(x, axis)
+    fs = check_fs(fs)
+    nps = resolve_nperseg(nperseg, resolution_Hz, fs)
     if nps > xs.shape[-1]:
         raise InsufficientDataError(
             "nperseg", f"<= len(x)={xs.shape[-1]}", str(nps),
             f"resolution {fs / nps:g} Hz needs {nps / fs:g} s of signal, "
             f"there are {xs.shape[-1] / fs:g} s")
-    nov = _check_noverlap(noverlap, nps)
-    det = _check_detrend(detrend)
-    mask = _check_valid(valid, xs, axis)
-    w = _window_array(window, nps)
+    nov = check_noverlap(noverlap, nps)
+    det = check_detrend(detrend)
+    mask = check_valid(valid, xs, axis)
+    w = window_array(window, nps)
     props = window_properties(window if not isinstance(window, np.ndarray) else w, nps)
     return xs, fs, mask, nps, nov, w, det, props
 
@@ -258,15 +249,15 @@ def welch_psd(x: Any, fs: float, *, valid: Any = None, unit: str = "",
     """
     if average not in ("mean", "median"):
         raise SignalError("average", "'mean' or 'median'", repr(average))
-    xs, fs, mask, nps, nov, w, det, props = _prepare(x, fs, valid, nperseg, resolution_Hz,
+    xs, fs, mask, nps, nov, w, det, props = prepare_welch(x, fs, valid, nperseg, resolution_Hz,
                                                      noverlap, window, detrend, axis)
-    _check_not_constant(xs, mask)
-    freq, P, account, _ = _welch_core(xs, mask, fs, w, nps, nov, det, average, "density",
+    check_not_constant(xs, mask)
+    freq, P, account, _ = welch_core(xs, mask, fs, w, nps, nov, det, average, "density",
                                       props)
     return Spectrum(freq_Hz=freq, unit=unit, fs_Hz=fs, nperseg=nps, noverlap=nov,
                     window=window, detrend=det, account=account,
                     psd_per_Hz=np.moveaxis(P, -1, axis), average=average,
-                    freq_axis=_norm_axis(axis, P.ndim))
+                    freq_axis=norm_axis(axis, P.ndim))
 
 
 def amplitude_spectrum(x: Any, fs: float, *, valid: Any = None, unit: str = "",
@@ -308,9 +299,9 @@ def amplitude_spectrum(x: Any, fs: float, *, valid: Any = None, unit: str = "",
     >>> abs(float(a.amplitude.max()) / 3.0 - 1) < a.scalloping_tolerance
     True
     """
-    xs, fs, mask, nps, nov, w, det, props = _prepare(x, fs, valid, nperseg, resolution_Hz,
+    xs, fs, mask, nps, nov, w, det, props = prepare_welch(x, fs, valid, nperseg, resolution_Hz,
                                                      noverlap, window, detrend, axis)
-    freq, P, account, _ = _welch_core(xs, mask, fs, w, nps, nov, det, "mean", "spectrum",
+    freq, P, account, _ = welch_core(xs, mask, fs, w, nps, nov, det, "mean", "spectrum",
                                       props)
     amp = np.sqrt(2.0 * P)
     amp[..., 0] = np.sqrt(P[..., 0])

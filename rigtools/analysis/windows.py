@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Segments", "n_windows", "valid_segments"]
+__all__ = ["Segments", "n_windows", "true_runs", "valid_segments"]
 
 
 @dataclass(frozen=True)
@@ -161,3 +161,18 @@ def valid_segments(valid: np.ndarray, min_length: int = 1) -> Segments:
         n_samples=n,
         min_length=int(min_length),
     )
+
+
+def true_runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Half-open index ranges ``[a, b)`` of consecutive ``True`` in ``mask``.
+
+    Examples
+    --------
+    >>> true_runs(np.array([1, 1, 0, 1], bool))
+    [(0, 2), (3, 4)]
+    """
+    m = np.r_[False, mask, False].astype(np.int8)
+    d = np.diff(m)
+    starts = np.flatnonzero(d == 1)
+    stops = np.flatnonzero(d == -1)
+    return list(zip(starts.tolist(), stops.tolist(), strict=True))

@@ -2,13 +2,20 @@
 
 One module per subcommand, each with ``add_parser(subparsers)`` and ``run(args) -> int``.
 
-Exit codes:
+Exit codes (:mod:`rigtools.cli.common`):
 
 ====  ======================================================================
 0     done; if anything was lost (rejected frames, gaps), a warning on stderr
-2     usage error (bad arguments)
+2     usage error (bad arguments): argparse's usage message
 3     the input is unusable: a rigtools error names the file, position and cause
 ====  ======================================================================
+
+One error story: :func:`main` turns every error rigtools raises on purpose
+(:class:`rigtools.errors.RigtoolsError`, the whole tree drawn in :mod:`rigtools.errors`), every
+error the physics raises on purpose (:class:`models.errors.ModelError`: impossible geometry, a
+jammed mesh, ...) and an :class:`OSError` (a file that cannot be read or written) into exit
+code 3 and one line on stderr, ``rigtools: error: <message>``. Anything else is a bug and keeps
+its traceback; ``--debug`` re-raises the errors above too.
 """
 
 from __future__ import annotations
@@ -19,15 +26,13 @@ import ctypes.util
 import sys
 from collections.abc import Sequence
 
+from models.errors import ModelError
 from rigtools import __version__
 from rigtools.cli import demo, info, ingest, observe, spectrum
+from rigtools.cli.common import EXIT_OK, EXIT_UNUSABLE, EXIT_USAGE, fail
 from rigtools.errors import RigtoolsError
 
-__all__ = ["EXIT_OK", "EXIT_UNUSABLE", "EXIT_USAGE", "main"]
-
-EXIT_OK = 0
-EXIT_USAGE = 2
-EXIT_UNUSABLE = 3
+__all__ = ["EXIT_OK", "EXIT_UNUSABLE", "EXIT_USAGE", "build_parser", "main", "tune_allocator"]
 
 _SUBCOMMANDS = (ingest, info, spectrum, observe, demo)
 
@@ -50,7 +55,7 @@ _M_MMAP_THRESHOLD = -3  # glibc mallopt parameter
 _MMAP_THRESHOLD_BYTES = 256 * 1024
 
 
-def _tune_allocator() -> None:
+def tune_allocator() -> None:
     """Hand large freed buffers back to the system at once (glibc only; the CLI only).
 
     Ingest streams batches of a few MB through NumPy. glibc raises its mmap threshold
@@ -74,22 +79,20 @@ def _tune_allocator() -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``rigtools`` console script."""
-    _tune_allocator()
+    tune_allocator()
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
         return int(args.func(args))
-    except RigtoolsError as exc:
+    except (RigtoolsError, ModelError) as exc:
         if args.debug:
             raise
-        print(f"rigtools: error: {exc}", file=sys.stderr)
-        return EXIT_UNUSABLE
+        return fail(str(exc))
     except OSError as exc:  # an output path that cannot be written, a disk that is full
         if args.debug:
             raise
         where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
-        print(f"rigtools: error: {where}{exc.strerror or exc}", file=sys.stderr)
-        return EXIT_UNUSABLE
+        return fail(f"{where}{exc.strerror or exc}")
     except KeyboardInterrupt:
         print("rigtools: interrupted", file=sys.stderr)
         return 130

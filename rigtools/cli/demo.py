@@ -11,6 +11,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from rigtools.cli.arguments import positive_float
+
 __all__ = ["add_parser", "run"]
 
 
@@ -22,7 +24,8 @@ def add_parser(subparsers: Any) -> None:
         description=__doc__.splitlines()[2] if __doc__ else None,
     )
     p.add_argument("-o", "--output", default="demo-out", help="output folder (default demo-out)")
-    p.add_argument("--duration", type=float, default=4.0, help="length of the run (s)")
+    p.add_argument("--duration", type=positive_float, default=4.0,
+                   help="length of the run (s, > 0)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the synthetic run")
     p.set_defaults(func=run)
 

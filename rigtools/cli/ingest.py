@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from rigtools.cli._common import add_read_options, read_from_args, warn_losses
+from rigtools.cli.common import add_read_options, read_from_args, warn_losses
 from rigtools.ingest import write_parquet
 
 __all__ = ["add_parser", "run"]

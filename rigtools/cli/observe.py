@@ -14,11 +14,15 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+from rigtools.campaign import load_campaign, write_observations
+from rigtools.cli.common import fail, one_line
+
+if TYPE_CHECKING:
+    from rigtools.campaign import Observations, RunObservations
 
 __all__ = ["add_parser", "format_summary", "run"]
-
-_EXIT_UNUSABLE = 3
 
 
 def add_parser(subparsers: Any) -> None:
@@ -81,7 +85,7 @@ def _fmt(v: Any, spec: str) -> str:
     return format(f, spec) if math.isfinite(f) else "-"
 
 
-def format_summary(obs: Any) -> str:
+def format_summary(obs: Observations) -> str:
     """One line per run: status, channels analysed, clean modes, lowest f_n, Arms (max).
 
     ``modes`` counts clean modes (status ``ok``) over all found: a flagged mode (clipped
@@ -116,17 +120,18 @@ def format_summary(obs: Any) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Run the subcommand."""
-    from rigtools.analysis.observations import observe_campaign, write_observations
-    from rigtools.campaign import load_campaign
+    # Observing loads the signal analysis (scipy.signal): when this subcommand runs, not when
+    # the command line starts.
+    from rigtools.campaign.observe import observe_campaign
 
     campaign = load_campaign(args.campaign)
     progress = _Progress(len(campaign.runs), getattr(args, "progress", None))
 
-    def on_run(r: Any) -> None:
+    def on_run(r: RunObservations) -> None:
         for w in r.warnings:
-            progress.write(f"rigtools: warning: {w}")
+            progress.write(f"rigtools: warning: {one_line(w)}")
         if not r.analysed:
-            progress.write(f"rigtools: error: run {r.run_id!r} failed: {r.error}")
+            progress.write(f"rigtools: error: run {r.run_id!r} failed: {one_line(str(r.error))}")
         progress.update(r.run_id)
 
     try:
@@ -140,6 +145,5 @@ def run(args: argparse.Namespace) -> int:
     failed = f", {total - n} failed" if n < total else ""
     print(f"wrote {out}: {len(obs.table)} rows, {n} of {total} run(s) analysed{failed}")
     if n == 0:
-        print(f"rigtools: error: {args.campaign}: no run could be analysed", file=sys.stderr)
-        return _EXIT_UNUSABLE
+        return fail(f"{args.campaign}: no run could be analysed")
     return 0

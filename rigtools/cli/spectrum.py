@@ -3,8 +3,9 @@
 Prints one line per channel (rate, Welch windows, degrees of freedom, RMS in the time domain
 and from the PSD, quality flags) and one line per PSD peak (frequency, prominence, kind; for
 structural peaks the SDOF natural frequency and damping with their standard uncertainties).
-``--plot OUT.png`` draws the PSDs with the peaks marked (matplotlib Figure on the Agg canvas,
-no pyplot). Exit 0 when at least one channel was analysed, 3 when none could be.
+``--plot OUT.png`` draws the PSDs with the peaks marked (:func:`rigtools.plots.spectrum.
+plot_spectrum`: a matplotlib Figure on the Agg canvas, no pyplot). Exit 0 when at least one
+channel was analysed, 3 when none could be.
 """
 
 from __future__ import annotations
@@ -13,15 +14,20 @@ import argparse
 import math
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from rigtools.cli._common import add_read_options, read_from_args, warn_losses
+import numpy as np
 
-__all__ = ["add_parser", "format_spectrum", "mesh_frequency_from_speed", "plot_spectrum", "run"]
+from models.geometry import mesh_frequency_Hz
+from rigtools.cli.arguments import int_at_least, non_negative_float, positive_float
+from rigtools.cli.common import add_read_options, fail, read_from_args, warn_losses
+from rigtools.ingest import Recording
 
-_EXIT_UNUSABLE = 3
-#: Below this many equivalent dof a channel is flagged ``low_dof`` (as ModalEstimate.low_dof).
-LOW_DOF = 35.0
+if TYPE_CHECKING:
+    from rigtools.analysis.recording import ChannelAnalysis, RecordingAnalysis
+
+__all__ = ["add_parser", "format_spectrum", "mesh_frequency_from_speed", "run"]
+
 #: Shortest Welch window accepted on the command line (samples).
 MIN_NPERSEG = 16
 SPEED_SIGNAL = "PinionSpeed_rpm"
@@ -40,7 +46,7 @@ def add_parser(subparsers: Any) -> None:
                    help="channel to analyse (repeat for several; default all)")
     p.add_argument("--nperseg", type=_nperseg, default=4096, metavar="N",
                    help=f"Welch window length in samples, >= {MIN_NPERSEG} (default 4096)")
-    p.add_argument("--mesh-frequency-Hz", dest="mesh_Hz", type=_positive, default=None,
+    p.add_argument("--mesh-frequency-Hz", dest="mesh_Hz", type=positive_float, default=None,
                    metavar="F", help="mesh frequency (Hz, > 0), to tell mesh harmonics from "
                    "resonances; default z1 x mean speed / 60 when --z1 is given and the "
                    "recording holds the speed signal")
@@ -48,69 +54,33 @@ def add_parser(subparsers: Any) -> None:
                    help="pinion teeth: with the speed signal gives the mesh frequency")
     p.add_argument("--speed-signal", dest="speed_signal", default=SPEED_SIGNAL, metavar="S",
                    help=f"slow signal of the pinion speed in rpm (default {SPEED_SIGNAL})")
-    p.add_argument("--prominence-dB", dest="prominence_dB", type=_non_negative, default=6.0,
+    p.add_argument("--prominence-dB", dest="prominence_dB", type=non_negative_float, default=6.0,
                    metavar="DB", help="least prominence of a peak (dB, >= 0, default 6)")
     p.add_argument("--plot", metavar="OUT.png", help="write the PSDs with peaks as a PNG")
     add_read_options(p)
     p.set_defaults(func=run)
 
 
-def _finite(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not math.isfinite(v):
-        raise argparse.ArgumentTypeError(f"must be finite, got {text!r}")
-    return v
-
-
-def _positive(text: str) -> float:
-    v = _finite(text)
-    if not v > 0:
-        raise argparse.ArgumentTypeError(f"must be > 0, got {text!r}")
-    return v
-
-
-def _non_negative(text: str) -> float:
-    v = _finite(text)
-    if not v >= 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {text!r}")
-    return v
-
-
-def _int_at_least(text: str, least: int) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if v < least:
-        raise argparse.ArgumentTypeError(f"must be an integer >= {least}, got {text!r}")
-    return v
-
-
 def _nperseg(text: str) -> int:
-    return _int_at_least(text, MIN_NPERSEG)
+    return int_at_least(text, MIN_NPERSEG)
 
 
 def _teeth(text: str) -> int:
-    return _int_at_least(text, 1)
+    return int_at_least(text, 1)
 
 
-def mesh_frequency_from_speed(rec: Any, z1: int, speed_signal: str = "PinionSpeed_rpm"
+def mesh_frequency_from_speed(rec: Recording, z1: int, speed_signal: str = SPEED_SIGNAL
                               ) -> tuple[float | None, str]:
     r"""Mesh frequency :math:`z_1 \bar n / 60` (Hz) from a speed slow signal in rpm.
 
     Returns the frequency (None when it cannot be derived) and a note saying how it was got
-    or why not.
+    or why not. The frequency is :func:`models.geometry.mesh_frequency_Hz` of the mean speed.
     """
-    slow = getattr(rec, "slow", {}) or {}
+    slow = rec.slow
     sig = slow.get(speed_signal)
     if sig is None:
         return None, (f"no slow signal {speed_signal!r} (the recording holds: "
                       f"{', '.join(slow) or 'none'})")
-    import numpy as np
-
     v = np.asarray(sig.values, np.float64)
     v = v[np.isfinite(v)]
     if v.size == 0:
@@ -118,7 +88,7 @@ def mesh_frequency_from_speed(rec: Any, z1: int, speed_signal: str = "PinionSpee
     rpm = float(np.mean(np.abs(v)))
     if not rpm > 0:
         return None, f"slow signal {speed_signal!r} is zero (a standstill)"
-    f_mesh = z1 * rpm / 60.0
+    f_mesh = float(mesh_frequency_Hz(rpm, z1))
     return f_mesh, (f"mesh frequency {f_mesh:.4g} Hz = z1 {z1} x mean {speed_signal} "
                     f"{rpm:.5g} rpm / 60")
 
@@ -127,7 +97,7 @@ def _f(v: float | None, fmt: str) -> str:
     return "-" if v is None or not math.isfinite(v) else format(v, fmt)
 
 
-def _channel_flags(ca: Any) -> str:
+def _channel_flags(ca: ChannelAnalysis) -> str:
     q = ca.quality
     out = []
     if q.n_invalid:
@@ -142,13 +112,13 @@ def _channel_flags(ca: Any) -> str:
         out.append("too_short")
     if ca.spectrum is not None and ca.peaks is None:
         out.append("peaks_failed")
-    if ca.spectrum is not None and 0 < q.dof < LOW_DOF:
+    if ca.spectrum is not None and q.low_dof:
         out.append("low_dof")  # few Welch averages: damping less reliable
     return ",".join(out) or "-"
 
 
-def format_spectrum(analysis: Any, source: str) -> str:
-    """The printed table of a :class:`~rigtools.analysis.peaks.RecordingAnalysis`."""
+def format_spectrum(analysis: RecordingAnalysis, source: str) -> str:
+    """The printed table of a :class:`~rigtools.analysis.recording.RecordingAnalysis`."""
     chans = list(analysis.channels.values())
     first = next((c.spectrum for c in chans if c.spectrum is not None), None)
     lines = [f"source    {source}"]
@@ -191,59 +161,20 @@ def format_spectrum(analysis: Any, source: str) -> str:
     return "\n".join(lines)
 
 
-def plot_spectrum(analysis: Any, title: str = "") -> Any:
-    """A :class:`matplotlib.figure.Figure` of the PSDs with their peaks marked (Agg canvas)."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(7.0, 4.2), layout="constrained")
-    FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
-    unit = ""
-    for ca in analysis.channels.values():
-        spec = ca.spectrum
-        if spec is None:
-            continue
-        unit = spec.psd_unit
-        f, p = spec.freq_Hz[1:], spec.psd_per_Hz[1:]
-        peaks = ca.peaks.peaks if ca.peaks is not None else ()
-        modes = [pk.mode for pk in peaks if pk.mode is not None
-                 and (pk.kind == "structural" or pk.possible_resonance)]
-        label = ca.name
-        if modes:
-            shown = ", ".join(f"{m.f_n_Hz:.0f} Hz (ζ {m.zeta:.3f})" for m in modes[:3])
-            label += f": f_n {shown}" + (" ..." if len(modes) > 3 else "")
-        (line,) = ax.semilogy(f, p, lw=0.8, label=label)
-        for pk in peaks:
-            structural = pk.kind == "structural" or pk.possible_resonance
-            ax.plot([pk.f_Hz], [pk.psd_per_Hz], "v" if structural else "x",
-                    color=line.get_color(), ms=7 if structural else 4)
-    ax.set_xlabel("frequency (Hz)")
-    ax.set_ylabel(f"PSD ({unit})" if unit else "PSD")
-    ax.grid(True, which="both", lw=0.3, alpha=0.5)
-    if ax.lines:
-        ax.legend(fontsize=8, loc="upper right")
-    ax.set_title(title + "  (▼ resonance, × line or tone)" if title else
-                 "▼ resonance, × line or tone", fontsize=9)
-    return fig
-
-
 def run(args: argparse.Namespace) -> int:
     """Run the subcommand."""
-    from rigtools.analysis.peaks import analyse_recording
+    # The analysis (scipy.signal) is loaded when this subcommand runs, not when the command
+    # line starts: ``rigtools info`` and ``ingest`` do not pay for it.
+    from rigtools.analysis.recording import analyse_recording
 
     rec = read_from_args(args)
     if args.channels:
         missing = [c for c in args.channels if c not in rec.channels]
         if missing:
-            print(f"rigtools: error: {args.file}: no channel {', '.join(map(repr, missing))} "
-                  f"(the recording holds: {', '.join(rec.channels) or 'none'})",
-                  file=sys.stderr)
-            return _EXIT_UNUSABLE
+            return fail(f"{args.file}: no channel {', '.join(map(repr, missing))} "
+                        f"(the recording holds: {', '.join(rec.channels) or 'none'})")
     if not rec.channels:
-        print(f"rigtools: error: {args.file}: the recording holds no uniform channel",
-              file=sys.stderr)
-        return _EXIT_UNUSABLE
+        return fail(f"{args.file}: the recording holds no uniform channel")
     mesh_Hz = args.mesh_Hz
     if mesh_Hz is None and getattr(args, "z1", None) is not None:
         mesh_Hz, note = mesh_frequency_from_speed(rec, args.z1, args.speed_signal)
@@ -261,11 +192,13 @@ def run(args: argparse.Namespace) -> int:
         if ca.error:
             print(f"rigtools: warning: {ca.error}", file=sys.stderr)
     if args.plot:
+        # matplotlib is loaded only when a figure is asked for (every subcommand starts faster)
+        from rigtools.plots.spectrum import plot_spectrum
+
         fig = plot_spectrum(analysis, Path(args.file).name)
         out = Path(args.plot)
         fig.savefig(out, format="png", dpi=150)
         print(f"wrote {out}")
     if all(ca.spectrum is None for ca in analysis.channels.values()):
-        print(f"rigtools: error: {args.file}: no channel could be analysed", file=sys.stderr)
-        return _EXIT_UNUSABLE
+        return fail(f"{args.file}: no channel could be analysed")
     return 0

@@ -23,8 +23,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from rigtools.ingest.dbc import load_dbc
-from rigtools.ingest.frames import CanFrameBatch
+from rigtools.ingest.can.dbc import load_dbc
+from rigtools.ingest.can.frames import CanFrameBatch
 from rigtools.ingest.layout import CanLayout, can_layout
 from rigtools.schemas import schema_path
 
@@ -95,7 +95,7 @@ def quantise_reference(
     -------
     dict of str to numpy.ndarray
         Channel name -> ``raw * scale + offset`` (float64), computed as
-        :func:`rigtools.ingest.dbc.decode_signal` computes it.
+        :func:`rigtools.ingest.can.dbc.decode_signal` computes it.
     """
     layout = reference_layout(dbc)
     named = _name_channels(channels, layout)

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from rigtools.ingest.mcap_decoders import (
+from rigtools.ingest.mcap.decoders import (
     ACCEL_BATCH_SCHEMA_NAME,
     IMU_SCHEMA_NAME,
     IMU_SCHEMA_TEXT,
@@ -360,7 +360,7 @@ def write_imu_cdr_mcap(
     """Write many ``sensor_msgs/msg/Imu`` messages fast (a driver's per-sample stream).
 
     The same file :func:`write_imu_mcap` writes (schema ``ros2msg``
-    :data:`~rigtools.ingest.mcap_decoders.IMU_SCHEMA_TEXT`, channel encoding ``cdr``), but
+    :data:`~rigtools.ingest.mcap.decoders.IMU_SCHEMA_TEXT`, channel encoding ``cdr``), but
     the payloads are laid out with array operations (:func:`imu_cdr_payloads`), so millions
     of messages take seconds, and big-endian CDR can be written too. ``std_msgs/msg/Float64``
     topics in ``scalars`` (topic -> ``(time_s, values)``, ``log_time = time_s``) are

@@ -24,11 +24,11 @@ from typing import Any
 import numpy as np
 
 from rigtools.analysis import analyse_recording, step_levels_from_recording
-from rigtools.cli.info import format_info
 from rigtools.demo.can_writer import encode_reference_frames, write_can_log
 from rigtools.demo.mcap_writer import write_accel_mcap
 from rigtools.demo.synthetic import SyntheticRun, synthetic_run
 from rigtools.ingest import Recording, RunMetadata, read, read_parquet, write_parquet
+from rigtools.recording_summary import format_info
 
 __all__ = ["analyse_demo", "run_demo"]
 

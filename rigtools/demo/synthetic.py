@@ -17,6 +17,8 @@ from typing import Any
 import numpy as np
 from scipy import signal as sps
 
+from models.geometry import mesh_frequency_Hz
+
 __all__ = ["SyntheticRun", "synthetic_run"]
 
 ACCEL_LSB_M_S2 = 0.015  # data_schemas/rig_reference.dbc, Acc*_S* scale
@@ -93,7 +95,7 @@ def synthetic_run(
     fs = float(sample_rate_Hz)
     n = round(duration_s * fs) // multiple_of * multiple_of
     t = np.arange(n) / fs
-    f_mesh = z1 * speed_rpm / 60.0
+    f_mesh = float(mesh_frequency_Hz(speed_rpm, z1))
     amps = (4.0, 1.5, 0.8)
     # Second-order resonance as a digital filter with the SDOF's poles mapped exactly
     # (impulse invariance, z = exp(s T)): peak at f_n sqrt(1 - 2 zeta^2) and half-power damping

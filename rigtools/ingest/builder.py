@@ -451,7 +451,7 @@ def _convert_into(raw: np.ndarray, conversion: tuple[tuple[float, float], ...],
     for scale, offset in conversion:
         if scale == 1.0 and offset == 0.0:
             continue
-        # Same operations as rigtools.ingest.dbc.decode_signal, so results match bit for bit.
+        # Same operations as rigtools.ingest.can.dbc.decode_signal, so results match bit for bit.
         np.multiply(out, scale, out=out)
         np.add(out, offset, out=out)
 

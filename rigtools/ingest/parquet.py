@@ -21,20 +21,21 @@ import hashlib
 import json
 import math
 from pathlib import Path
-from typing import Any
+from typing import Any, Final
 
 import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
 from rigtools.errors import RecordingFormatError
+from rigtools.ingest.contract import ReadRequest
 from rigtools.ingest.recording import Channel, Provenance, Recording, RunMetadata, SlowSignal
 from rigtools.schemas import iter_errors
 
-__all__ = ["KIND", "NAME", "read_parquet", "sniff", "write_parquet"]
+__all__ = ["NAME", "READER", "ParquetReader", "read_parquet", "sniff", "write_parquet"]
 
+#: Format name in :data:`rigtools.ingest.registry.READERS`.
 NAME = "parquet"
-KIND = "recording"
 META_KEY = b"rigtools.recording"
 DIGEST_KEY = b"rigtools.recording.sha256"
 
@@ -196,3 +197,28 @@ def read_parquet(path: str | Path) -> Recording:
                                    "unique channel and slow-signal names", "repeated names")
     return Recording(channels, slow, RunMetadata.from_dict(doc["metadata"]),
                      Provenance.from_dict(doc["provenance"]))
+
+
+class ParquetReader:
+    """Normalized recordings in the registry: read whole, as they were written.
+
+    The request does not apply: the recording was made by an earlier read, whose DBC,
+    mapping, run metadata and provenance it keeps.
+    """
+
+    name: Final = NAME
+
+    def __repr__(self) -> str:
+        return "ParquetReader()"
+
+    def sniff(self, head: bytes) -> bool:
+        """Parquet magic."""
+        return sniff(head)
+
+    def read(self, path: Path, request: ReadRequest) -> Recording:
+        """:func:`read_parquet` of the file (``request`` is not used)."""
+        return read_parquet(path)
+
+
+#: This format in :data:`rigtools.ingest.registry.READERS`.
+READER: Final = ParquetReader()

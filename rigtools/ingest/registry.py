@@ -1,36 +1,42 @@
 """Choosing a reader: by content first, by suffix where content says nothing.
 
-Each reader module exposes ``NAME``, ``KIND`` (``"can"``, ``"mcap"`` or ``"recording"``),
-``sniff(head: bytes) -> bool`` and either ``iter_batches`` (CAN logs) or ``ingest`` (MCAP).
+Every format is one reader object satisfying
+:class:`~rigtools.ingest.contract.RecordingReader` (``name``, ``sniff(head) -> bool``,
+``read(path, request) -> Recording``), listed in :data:`READERS`; the CAN log formats are
+:class:`~rigtools.ingest.can.reader.CanLogReader` objects, also listed in :data:`CAN_READERS`.
 A file whose suffix lies (a BLF named ``.log``) or is missing is still read by the reader its
 first bytes name; ``.gz`` is unwrapped first.
 """
 
 from __future__ import annotations
 
-import gzip
-import hashlib
-import importlib
-import io
-import zlib
 from pathlib import Path
-from types import ModuleType
-from typing import Any, BinaryIO, Final
+from typing import Final
 
 from rigtools.errors import RecordingFormatError, UnsupportedFormatError
-from rigtools.ingest.recording import IngestReport
+from rigtools.ingest import mcap, parquet
+from rigtools.ingest.can import asc, blf, candump, csv_log, trc
+from rigtools.ingest.can.reader import CanLogReader
+from rigtools.ingest.contract import RecordingReader
+from rigtools.ingest.files import open_source
 
-__all__ = ["READERS", "SUFFIXES", "detect_format", "open_source", "reader_module", "sha256_of"]
+__all__ = ["CAN_READERS", "READERS", "SUFFIXES", "detect_format"]
 
-#: Reader modules by format name (modules under ``rigtools.ingest``).
-READERS: Final[dict[str, str]] = {
-    "mcap": "rigtools.ingest.mcap",
-    "blf": "rigtools.ingest.blf",
-    "asc": "rigtools.ingest.asc",
-    "trc": "rigtools.ingest.trc",
-    "candump": "rigtools.ingest.candump",
-    "csv": "rigtools.ingest.csv_log",
-    "parquet": "rigtools.ingest.parquet",
+#: The CAN log formats by name: frames parsed from the log, decoded through a DBC.
+CAN_READERS: Final[dict[str, CanLogReader]] = {
+    "blf": blf.READER,
+    "trc": trc.READER,
+    "asc": asc.READER,
+    "candump": candump.READER,
+    "csv": csv_log.READER,
+}
+
+#: Every format by name, in the order :func:`detect_format` asks them about the content:
+#: binary magics first, then the text dialects, the loosest last.
+READERS: Final[dict[str, RecordingReader]] = {
+    "mcap": mcap.READER,
+    "parquet": parquet.READER,
+    **CAN_READERS,
 }
 
 #: Lower-case suffix -> format name; used only when the content does not identify the file.
@@ -44,81 +50,7 @@ SUFFIXES: Final[dict[str, str]] = {
     ".parquet": "parquet",
 }
 
-# Content checks in this order: binary magics first, then the text dialects, the loosest last.
-_SNIFF_ORDER: Final[tuple[str, ...]] = ("mcap", "parquet", "blf", "trc", "asc", "candump", "csv")
-
 _HEAD_BYTES = 8192
-
-
-def reader_module(fmt: str) -> ModuleType:
-    """Import the reader module of a format."""
-    return importlib.import_module(READERS[fmt])
-
-
-def sha256_of(path: Path) -> tuple[str, int]:
-    """SHA-256 (hex) and size of a file, read in 1 MiB blocks."""
-    h = hashlib.sha256()
-    size = 0
-    with open(path, "rb") as f:
-        while block := f.read(1 << 20):
-            h.update(block)
-            size += len(block)
-    return h.hexdigest(), size
-
-
-def _is_gzip(path: Path) -> bool:
-    with open(path, "rb") as f:
-        return f.read(2) == b"\x1f\x8b"
-
-
-class _GuardedGzip(io.RawIOBase):
-    """A gzip stream whose damage ends the stream cleanly and is counted.
-
-    A gzip file cut short or corrupted raises ``EOFError``/``BadGzipFile``/``zlib.error``
-    from inside a reader; here it becomes the end of the data, counted ``truncated_stream``,
-    so every reader returns what was intact before it.
-    """
-
-    def __init__(self, path: Path, report: IngestReport | None) -> None:
-        self._gz = gzip.open(path, "rb")
-        self._report = report
-        self._path = path
-        self._pos = 0
-        self._broken = False
-
-    def readable(self) -> bool:
-        return True
-
-    def readinto(self, b: Any) -> int:
-        if self._broken:
-            return 0
-        try:
-            # read1: one decompression step at a time, so a break loses nothing before it.
-            data = self._gz.read1(len(b))
-            n = len(data)
-            b[:n] = data
-        except (EOFError, OSError, zlib.error) as exc:
-            if self._report is None:  # no report to count it in: let the reader see it
-                raise
-            self._broken = True
-            if self._report is not None:
-                self._report.reject("truncated_stream", 1, f"uncompressed byte {self._pos}")
-                self._report.warn(f"{self._path}: the gzip stream breaks off after "
-                                  f"{self._pos} bytes ({exc}); what came before was read")
-            return 0
-        self._pos += n
-        return n
-
-    def close(self) -> None:
-        self._gz.close()
-        super().close()
-
-
-def open_source(path: Path, report: IngestReport | None = None) -> BinaryIO:
-    """Open a file for reading, transparently unwrapping gzip (damage counted in ``report``)."""
-    if _is_gzip(path):
-        return io.BufferedReader(_GuardedGzip(path, report), 1 << 20)  # type: ignore[return-value]
-    return open(path, "rb")
 
 
 def detect_format(path: str | Path, fmt: str | None = None) -> str:
@@ -159,8 +91,8 @@ def detect_format(path: str | Path, fmt: str | None = None) -> str:
             raise RecordingFormatError(p, 0, "a readable gzip stream", str(exc)) from exc
     if not head:
         raise RecordingFormatError(p, 0, "a non-empty recording", "an empty file")
-    for name in _SNIFF_ORDER:
-        if reader_module(name).sniff(head):
+    for name, reader in READERS.items():
+        if reader.sniff(head):
             return name
     suffixes = [s.lower() for s in p.suffixes]
     if suffixes and suffixes[-1] == ".gz":

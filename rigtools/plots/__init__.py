@@ -14,12 +14,8 @@ seed 001), ``tribo`` (film thickness, Lambda, friction and mesh force at the con
 tribo-dynamic state; seed 002).
 """
 
-from rigtools.plots.dynamics import (
-    hysteresis_band,
-    hysteresis_bands,
-    plot_sweep,
-    plot_sweep_bifurcation,
-)
+from rigtools.plots.dynamics import plot_sweep, plot_sweep_bifurcation
+from rigtools.plots.spectrum import plot_spectrum
 from rigtools.plots.stiffness import (
     FIGURE_WIDTH_IN,
     mesh_cycle_figures,
@@ -27,11 +23,8 @@ from rigtools.plots.stiffness import (
     save_png,
 )
 from rigtools.plots.thermal import (
-    TABLE_6_TORQUES_NM,
-    ThermalClosure,
     plot_natural_frequency_vs_load,
     plot_stiffness_vs_load,
-    seed_000_hot_state_closure,
     thermal_figures,
 )
 from rigtools.plots.tribo import plot_tribo_solution
@@ -39,20 +32,16 @@ from rigtools.plots.two_stage import plot_peak_dte_map, plot_two_stage_bifurcati
 
 __all__ = [
     "FIGURE_WIDTH_IN",
-    "TABLE_6_TORQUES_NM",
-    "ThermalClosure",
-    "hysteresis_band",
-    "hysteresis_bands",
     "mesh_cycle_figures",
     "plot_mesh_cycle",
     "plot_natural_frequency_vs_load",
     "plot_peak_dte_map",
+    "plot_spectrum",
     "plot_stiffness_vs_load",
     "plot_sweep",
     "plot_sweep_bifurcation",
     "plot_tribo_solution",
     "plot_two_stage_bifurcation",
     "save_png",
-    "seed_000_hot_state_closure",
     "thermal_figures",
 ]

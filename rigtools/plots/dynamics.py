@@ -9,7 +9,8 @@ or ``rcParams``, so importing this module changes no global state.
 * :func:`plot_sweep`: Arms of the DTE (first three mesh harmonics) against ``Lambda`` -- or the
   mesh frequency (Hz) and DTE (um) with a scaling -- for an upward sweep (solid) and a downward
   sweep (dashed), with markers at the points with contact loss (open circles) and back-side
-  impact (crosses), and each hysteresis (jump) band shaded where the two branches differ.
+  impact (crosses), and each hysteresis (jump) band shaded where the two branches differ
+  (:func:`models.dynamics.sweep.hysteresis_bands`).
 * :func:`plot_sweep_bifurcation`: the Poincare points (DTE at mesh phase 0, after settling) against
   ``Lambda``: one dot per period of a period-1 response, ``n`` distinct dots for period ``n``,
   a cloud for aperiodic responses.
@@ -27,9 +28,9 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from models.dynamics.dimensional import DimensionalScaling
-from models.dynamics.sweep import SweepResult
+from models.dynamics.sweep import SweepResult, hysteresis_bands
 
-__all__ = ["hysteresis_band", "hysteresis_bands", "plot_sweep", "plot_sweep_bifurcation"]
+__all__ = ["plot_sweep", "plot_sweep_bifurcation"]
 
 _WIDTH_IN: Final = 7.0
 _HEIGHT_IN: Final = 4.2
@@ -46,48 +47,6 @@ def _check_result(result: object, name: str) -> SweepResult:
     if result.frequency.size == 0:
         raise ValueError(f"`{name}` has no points")
     return result
-
-
-def _differ(up: SweepResult, down: SweepResult, rel_tol: float) -> tuple[np.ndarray, np.ndarray]:
-    u, d = up.sorted(), down.sorted()
-    if not np.array_equal(u.frequency, d.frequency):
-        raise ValueError("`up` and `down` must share their frequency grid")
-    diff = np.abs(d.arms - u.arms) > rel_tol * np.maximum(d.arms, u.arms)
-    return u.frequency, diff
-
-
-def hysteresis_bands(
-    up: SweepResult, down: SweepResult, rel_tol: float = 0.1
-) -> list[tuple[float, float]]:
-    """Every run of consecutive grid points where the branches differ, as ``(lo, hi)``.
-
-    The two sweeps are compared point by point in increasing ``Lambda`` (they must share the
-    grid); a point differs where ``|A_down - A_up| > rel_tol * max(A_down, A_up)``. Separate
-    regions (e.g. a super-harmonic near ``Lambda = 0.5`` and the primary resonance) give
-    separate bands, in increasing frequency; a single differing point gives ``(f, f)``.
-    """
-    f, diff = _differ(up, down, rel_tol)
-    idx = np.flatnonzero(diff)
-    if idx.size == 0:
-        return []
-    breaks = np.flatnonzero(np.diff(idx) > 1)
-    starts = np.concatenate(([idx[0]], idx[breaks + 1]))
-    ends = np.concatenate((idx[breaks], [idx[-1]]))
-    return [(float(f[i]), float(f[j])) for i, j in zip(starts, ends, strict=True)]
-
-
-def hysteresis_band(
-    up: SweepResult, down: SweepResult, rel_tol: float = 0.1
-) -> tuple[float, float] | None:
-    """``(Lambda_lo, Lambda_hi)`` spanning *all* points where the branches differ, or None.
-
-    The envelope of :func:`hysteresis_bands` (which keeps separate regions apart; use it to
-    draw or report jump bands).
-    """
-    bands = hysteresis_bands(up, down, rel_tol)
-    if not bands:
-        return None
-    return bands[0][0], bands[-1][1]
 
 
 def _axes_units(
@@ -158,7 +117,7 @@ def plot_sweep(
         Upward sweep (any order; drawn sorted).
     down : SweepResult, optional
         Downward sweep on the same grid; then every region where the branches differ
-        (:func:`hysteresis_bands`) is shaded separately.
+        (:func:`models.dynamics.sweep.hysteresis_bands`) is shaded separately.
     scaling : DimensionalScaling, optional
         Draw in mesh frequency (Hz) and um instead of ``Lambda`` and units of ``L``.
     title : str, optional

@@ -16,10 +16,11 @@ and return :class:`matplotlib.figure.Figure` objects drawn on the Agg canvas. No
 * :func:`plot_natural_frequency_vs_load` draws ``f_n = sqrt(k_mean / m_e) / (2 pi)`` in the
   same way, with the torques of seed 000 Table 6 marked as ticks on the top axis and faint
   vertical lines.
-* :func:`thermal_figures` computes both for a shipped gear set (FZG-C by default) with the
-  thermal closure ``Delta_1 + Delta_2`` of seed 000's hot state read from temperatures
-  (:func:`models.thermal.thermal_deformation`, the reference-state reading that reproduces
-  the seed's ``c* ~ 10 um``, SEED-NOTES 8), and returns both figures.
+* :func:`thermal_figures` draws both for a shipped gear set (FZG-C by default) from
+  :func:`models.thermal.thermal_sweep`, with the thermal closure ``Delta_1 + Delta_2`` of seed
+  000's hot state read from temperatures (:func:`models.thermal.seed_000_hot_state_closure`,
+  the reference-state reading that reproduces the seed's ``c* ~ 10 um``, SEED-NOTES 8), and
+  returns both figures.
 
 The thermal closure is uniform along the path of contact and the same at every torque: the
 critical gap ``c* = (1 - chi)(Delta_1 + Delta_2)`` is then one number, and at ``c = c*`` the
@@ -51,25 +52,20 @@ from matplotlib.patches import Patch
 from numpy.typing import ArrayLike
 
 from models.geometry import GearSet
-from models.thermal import SEED_000_CHI, NaturalFrequency
-from rigtools.plots.stiffness import FIGURE_WIDTH_IN
-from rigtools.plots.thermal_data import (
-    _CRITICAL_ATOL_M,
-    _UM,
+from models.thermal import (
+    CRITICAL_GAP_ATOL_M,
+    SEED_000_CHI,
     TABLE_6_TORQUES_NM,
+    NaturalFrequency,
     ThermalClosure,
-    _jam_spans,
-    _num,
-    _thermal_sweep,
-    seed_000_hot_state_closure,
+    jammed_torque_spans,
+    thermal_sweep,
 )
+from rigtools.plots.stiffness import FIGURE_WIDTH_IN
 
 __all__ = [
-    "TABLE_6_TORQUES_NM",
-    "ThermalClosure",
     "plot_natural_frequency_vs_load",
     "plot_stiffness_vs_load",
-    "seed_000_hot_state_closure",
     "thermal_figures",
 ]
 
@@ -85,6 +81,7 @@ _TITLE_WIDTH: Final = 92
 _NOTE_WIDTH: Final = 138
 _CRITICAL_COLOUR: Final = "#000000"
 _MARK_COLOUR: Final = "0.6"
+_UM: Final = 1e6  # m -> um
 _N_PER_UM: Final = 1e6  # N/m -> N/um
 _N_PER_MM_UM: Final = 1e9  # N/m per m of face width -> N/(mm um)
 _KHZ: Final = 1e-3  # Hz -> kHz
@@ -139,6 +136,10 @@ def _check_positive(name: str, value: float | None) -> float | None:
 
 
 # --- pieces of the figures ---------------------------------------------------------------------
+def _num(x: float) -> str:
+    return f"{x:g}"
+
+
 def _um(x_m: float) -> str:
     """A length in um with 4 significant figures."""
     v = x_m * _UM
@@ -146,7 +147,7 @@ def _um(x_m: float) -> str:
 
 
 def _is_critical(c: float, c_star: float) -> bool:
-    return abs(c - c_star) <= _CRITICAL_ATOL_M
+    return abs(c - c_star) <= CRITICAL_GAP_ATOL_M
 
 
 def _backlash_names(backlash: np.ndarray, c_star: float) -> list[tuple[str, str]]:
@@ -255,7 +256,7 @@ def _plot_vs_torque(
     jammed = np.asarray(result.jammed, dtype=bool)
     net = np.asarray(result.min_net_deflection_m, dtype=float)
     x_max = float(torque[-1])
-    spans_of = [_jam_spans(torque, jammed[i], net[i]) for i in range(n_b)]
+    spans_of = [jammed_torque_spans(torque, jammed[i], net[i]) for i in range(n_b)]
     any_jam = any(spans_of)
 
     n_entries = n_b + int(any_jam)
@@ -305,11 +306,12 @@ def _plot_vs_torque(
         col = colours[i]
         hatch = _HATCHES[n_jam % len(_HATCHES)]
         n_jam += 1
-        for k, (lo, hi, _, open_high) in enumerate(spans):
+        for k, span_k in enumerate(spans):
+            lo, hi = span_k.lo_Nm, span_k.hi_Nm
             span = ax.axvspan(lo, hi, facecolor=to_rgba(col, 0.06), edgecolor=to_rgba(col, 0.3),
                               hatch=hatch, lw=0, zorder=0)
             span.set_gid(f"jammed/{i}/{k}")
-            if open_high:
+            if span_k.open_high:
                 continue
             ax.axvline(hi, color=col, lw=1.1, ls=(0, (1, 1.5)), zorder=2,
                        gid=f"jam-edge/{i}/{k}")
@@ -524,7 +526,8 @@ def thermal_figures(
 ) -> dict[str, Figure]:
     """The mean mesh stiffness and the natural frequency against torque for a gear set.
 
-    The thermal closure is seed 000's hot state (:func:`seed_000_hot_state_closure`: 302 N m,
+    The sweep is :func:`models.thermal.thermal_sweep`. The thermal closure is seed 000's hot
+    state (:func:`models.thermal.seed_000_hot_state_closure`: 302 N m,
     1500 min^-1, 90 deg C oil, the reading that reproduces ``c* ~ 10 um``) unless given; it is
     held fixed over the torque sweep, uniform along the path. Ishikawa's ``k_EP`` without the
     contact term and seed 000's load share (:func:`models.thermal.prepare_natural_frequency`).
@@ -551,7 +554,7 @@ def thermal_figures(
         ``"stiffness"`` (:func:`plot_stiffness_vs_load`) and ``"natural_frequency"``
         (:func:`plot_natural_frequency_vs_load`).
     """
-    sweep = _thermal_sweep(gear_set, backlash_m, torque_max_Nm, n_torques, thermal_closure, chi)
+    sweep = thermal_sweep(gear_set, backlash_m, torque_max_Nm, n_torques, thermal_closure, chi)
     gear_set, closure, c_star = sweep.gear_set, sweep.closure, sweep.c_star
     backlash, model, torque, result = sweep.backlash, sweep.model, sweep.torque, sweep.result
 

@@ -39,7 +39,6 @@ from rigtools.analysis.orders import (
     step_levels_from_recording,
 )
 from rigtools.analysis.speed import (
-    MissingSpeedError,
     detect_speed_steps,
     mesh_frequency_Hz,
     speed_from_slow_signal,
@@ -48,7 +47,7 @@ from rigtools.analysis.speed import (
     tacho_edges,
 )
 from rigtools.demo.synthetic import synthetic_run
-from rigtools.errors import RigtoolsError
+from rigtools.errors import MissingSpeedError, RigtoolsError
 from rigtools.ingest.recording import (
     Channel,
     IngestReport,

@@ -36,8 +36,6 @@ import pytest
 from scipy import signal as sps
 
 from rigtools.analysis import (
-    ConstantSignalError,
-    SignalError,
     Spectrum,
     WelchAccount,
     analyse_peaks,
@@ -49,6 +47,7 @@ from rigtools.analysis import (
     welch_psd,
 )
 from rigtools.demo.synthetic import synthetic_run
+from rigtools.errors import ConstantSignalError, SignalError
 from rigtools.ingest.recording import Channel, IngestReport, Provenance, Recording, RunMetadata
 
 FS = 25_600.0
@@ -409,16 +408,16 @@ def test_white_noise_gives_no_structural_peak(duration_s, nperseg):
 def test_detection_threshold_is_the_sidak_corrected_chi2_quantile():
     from scipy.stats import chi2
 
-    from rigtools.analysis.peaks import _detection_threshold_db
+    from rigtools.analysis.peaks import detection_threshold_db
 
     nu, n, alpha = 21.0, 4096, 0.01
-    hi, spread = _detection_threshold_db(nu, n, alpha)
+    hi, spread = detection_threshold_db(nu, n, alpha)
     a1 = 1 - (1 - alpha) ** (1 / n)
     assert hi == pytest.approx(10 * np.log10(chi2.isf(a1, nu) / nu), rel=1e-9)
     assert spread == pytest.approx(hi - 10 * np.log10(chi2.ppf(a1, nu) / nu), rel=1e-9)
     # more bins searched or fewer averages: a higher threshold
-    assert _detection_threshold_db(nu, 4 * n, alpha)[0] > hi
-    assert _detection_threshold_db(4 * nu, n, alpha)[0] < hi
+    assert detection_threshold_db(nu, 4 * n, alpha)[0] > hi
+    assert detection_threshold_db(4 * nu, n, alpha)[0] < hi
     x = np.random.default_rng(0).normal(size=int(2 * FS))
     pa = analyse_peaks(welch_psd(x, FS, nperseg=8192), false_alarm=0.001)
     assert pa.false_alarm == 0.001 and pa.detection_threshold_dB > hi

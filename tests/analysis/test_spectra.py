@@ -17,9 +17,6 @@ from hypothesis import strategies as st
 from scipy import signal as sps
 
 from rigtools.analysis import (
-    ConstantSignalError,
-    InsufficientDataError,
-    SignalError,
     amplitude_spectrum,
     band_rms,
     detect_clipping,
@@ -30,6 +27,7 @@ from rigtools.analysis import (
     welch_psd,
     window_properties,
 )
+from rigtools.errors import ConstantSignalError, InsufficientDataError, SignalError
 
 FS = 25_600.0
 DBC_FULL_SCALE = (-491.52, 491.505)  # int16 x 0.015 m/s^2, data_schemas/rig_reference.dbc

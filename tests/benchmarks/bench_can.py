@@ -9,8 +9,8 @@ A 60 s, 4-channel, 25.6 kHz reference-layout recording (2 048 000 accelerometer 
   (``for m in can.BLFReader(f): pass``), target >= 10x;
 * the reader alone (``iter_batches``) for reference;
 
-and, once, the decode stage alone: ``rigtools.ingest.can_assembly.assemble_can`` over prepared
-frame batches, and ``rigtools.ingest.dbc.decode_signal`` over every signal of every frame,
+and, once, the decode stage alone: ``rigtools.ingest.can.assembly.assemble_can`` over prepared
+frame batches, and ``rigtools.ingest.can.dbc.decode_signal`` over every signal of every frame,
 against cantools' per-frame ``db.decode_message(frame_id, data)`` (timed on the first
 ``--cantools-frames`` frames and expressed per frame), target >= 20x.
 
@@ -71,13 +71,13 @@ def bench_reader(path: Path, fmt: str, n_frames: int, repeat: int) -> dict[str, 
 
     from rigtools.ingest import read
     from rigtools.ingest.recording import IngestReport
-    from rigtools.ingest.registry import reader_module
+    from rigtools.ingest.registry import CAN_READERS
 
-    module = reader_module(fmt)
+    rigtools_reader = CAN_READERS[fmt]
 
     def bare_rigtools() -> int:
         with open(path, "rb") as f:
-            return sum(len(b) for b in module.iter_batches(f, str(path), IngestReport()))
+            return sum(len(b) for b in rigtools_reader.iter_batches(f, str(path), IngestReport()))
 
     def bare_python_can() -> int:
         reader = can.BLFReader if fmt == "blf" else can.CanutilsLogReader
@@ -99,11 +99,11 @@ def bench_reader(path: Path, fmt: str, n_frames: int, repeat: int) -> dict[str, 
 
 def bench_decode(path: Path, repeat: int, cantools_frames: int) -> dict[str, float]:
     """Decode stage alone against cantools' per-frame decode_message."""
-    from rigtools.ingest import blf
     from rigtools.ingest.builder import RecordingBuilder
-    from rigtools.ingest.can_assembly import assemble_can
-    from rigtools.ingest.dbc import decode_signal, load_dbc
-    from rigtools.ingest.frames import concat
+    from rigtools.ingest.can import blf
+    from rigtools.ingest.can.assembly import assemble_can
+    from rigtools.ingest.can.dbc import decode_signal, load_dbc
+    from rigtools.ingest.can.frames import concat
     from rigtools.ingest.layout import can_layout
     from rigtools.ingest.recording import IngestReport
     from rigtools.schemas import schema_path

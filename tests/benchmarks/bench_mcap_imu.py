@@ -16,7 +16,7 @@ prints:
   general path of the issue;
 * ``decompress only``: zstd decompression of every chunk, the ceiling for any reader;
 * peak memory: each of a library call and the command line's set-up
-  (``rigtools.cli._tune_allocator``) reads the file in a fresh child process after a 1 s file
+  (``rigtools.cli.tune_allocator``) reads the file in a fresh child process after a 1 s file
   of the same kind; the high-water resident set above that baseline is printed against the
   decoded arrays (3 channels x n float64).
 
@@ -106,8 +106,8 @@ _CHILD = textwrap.dedent(
 
     small, big, mode = sys.argv[1], sys.argv[2], sys.argv[3]
     if mode == "cli":
-        from rigtools.cli import _tune_allocator
-        _tune_allocator()
+        from rigtools.cli import tune_allocator
+        tune_allocator()
     read(small)
     base = status("VmRSS:")
     rec = read(big)
@@ -141,8 +141,9 @@ def measure(path: Path, small: Path) -> dict[str, float]:
     from mcap.stream_reader import StreamReader
     from mcap_ros2.decoder import DecoderFactory
 
-    from rigtools.ingest import mcap_decoders, read
+    from rigtools.ingest import read
     from rigtools.ingest.builder import RecordingBuilder
+    from rigtools.ingest.mcap import decoders as mcap_decoders
     from rigtools.ingest.mcap import ingest
     from rigtools.ingest.recording import IngestReport
 
@@ -266,7 +267,7 @@ def write_turns(path: Path, seconds: float = TURNS_SECONDS) -> Path:
     from mcap.writer import CompressionType, Writer
 
     from rigtools.demo.mcap_writer import imu_cdr_payloads
-    from rigtools.ingest.mcap_decoders import IMU_SCHEMA_TEXT
+    from rigtools.ingest.mcap.decoders import IMU_SCHEMA_TEXT
 
     n = int(seconds * FS)
     stamps = T0_NS + np.round(np.arange(n) * (1e9 / FS)).astype(np.int64)

@@ -5,7 +5,7 @@ resident set within about twice the size of its decoded float arrays (4 x 46.08 
 8 bytes = 1.47 GB). Each file is read in a fresh child process; the child first reads a tiny
 file of the same format (so every lazily imported module is loaded), notes its resident set,
 reads the big file, and reports the high-water mark above that baseline. Two modes: a plain
-library call, and the command line's set-up (``rigtools.cli._tune_allocator``: a fixed glibc
+library call, and the command line's set-up (``rigtools.cli.tune_allocator``: a fixed glibc
 mmap threshold, so freed batch buffers go back to the system instead of raising the peak).
 
 Run: ``python tests/benchmarks/bench_memory.py [--seconds 1800] [--formats mcap blf]``
@@ -40,8 +40,8 @@ _CHILD = textwrap.dedent(
 
     small, big, mode = sys.argv[1], sys.argv[2], sys.argv[3]
     if mode == "cli":  # what the rigtools command line sets up before reading
-        from rigtools.cli import _tune_allocator
-        _tune_allocator()
+        from rigtools.cli import tune_allocator
+        tune_allocator()
     read(small)
     base = status("VmRSS:")
     rec = read(big)

@@ -13,8 +13,8 @@ three loaded pairs) and with Delta = 0.5 linear tip relief, this prints
 
 The baseline's LSTE is compared with the vectorised one (they must agree to 1e-9). The
 compliance is the potential-energy model of ``models.stiffness.potential_energy`` tabulated
-on 401 points (``tabulate_compliance``) when that module imports, else an analytic parabola of
-the same shape; the direct (untabulated) potential-energy call is timed once for reference.
+on 401 points (``tabulate_compliance``); the direct (untabulated) potential-energy call is
+timed once for reference.
 
 Run: ``python tests/benchmarks/bench_mesh_cycle.py [--phases 200] [--repeat 20]``, or
 ``python -m pytest tests/benchmarks/bench_mesh_cycle.py -m benchmark -s``. Timings depend on
@@ -38,6 +38,7 @@ import pytest
 from models.geometry import GearPair, load_gear_set
 from models.stiffness.corner_contact import separation_distance
 from models.stiffness.mesh_cycle import mesh_cycle, prepare_mesh_cycle, tabulate_compliance
+from models.stiffness.potential_energy import pair_compliance
 from models.stiffness.tip_relief import normalised_tip_relief
 
 TORQUE_NM = 340.0
@@ -55,16 +56,7 @@ def _best(fn: Callable[[], T], repeat: int) -> tuple[float, T]:
 
 
 def compliance_for(pair: GearPair) -> tuple[Callable[[np.ndarray], np.ndarray], str]:
-    """Potential-energy compliance if importable, else an analytic parabola."""
-    try:
-        from models.stiffness.potential_energy import pair_compliance
-    except Exception:  # written in parallel: fall back to an analytic shape
-        sp, E = pair.pitch_point, pair.end_of_contact
-
-        def parabola(s: np.ndarray) -> np.ndarray:
-            return 5.3e-9 * (1 + 0.4 * ((np.asarray(s) - sp) / (E - sp)) ** 2)
-
-        return parabola, "analytic parabola"
+    """The potential-energy compliance of ``pair`` and its name."""
 
     def pe(s: np.ndarray) -> np.ndarray:
         return np.asarray(pair_compliance(pair, s).total_m_per_N)

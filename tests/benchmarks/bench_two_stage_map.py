@@ -29,10 +29,14 @@ import numpy as np
 import pytest
 
 from models.dynamics import two_stage_steady_response
-from models.dynamics.two_stage_kernels import _alloc, _map_parallel, _map_serial
+from models.dynamics.two_stage_kernels import (
+    allocate_map_outputs,
+    map_rows_parallel,
+    map_rows_serial,
+)
 from models.dynamics.two_stage_maps import (
     TwoStageThermalSetup,
-    _prepare_grid,
+    prepare_map_grid,
     two_stage_at_temperature,
 )
 
@@ -42,7 +46,7 @@ STEPS = 64
 
 
 def _kernel(kernel, grid):
-    out = _alloc(grid.Y0.shape[0], grid.Y0.shape[1], RECORD)
+    out = allocate_map_outputs(grid.Y0.shape[0], grid.Y0.shape[1], RECORD)
     t0 = time.perf_counter()
     kernel(*grid.kernel_args(), True, TRANSIENT, RECORD, *out)
     return time.perf_counter() - t0, out
@@ -52,14 +56,14 @@ def run(n_temps: int = 8, n_freqs: int = 60) -> dict:
     setup = TwoStageThermalSetup()
     f = np.linspace(2000.0, 12000.0, n_freqs)
     t = np.linspace(40.0, 120.0, n_temps)
-    small = _prepare_grid(setup, f[:2], t[:2], STEPS, "up")
-    _kernel(_map_parallel, small)  # compile / load the caches
-    _kernel(_map_serial, small)
+    small = prepare_map_grid(setup, f[:2], t[:2], STEPS, "up")
+    _kernel(map_rows_parallel, small)  # compile / load the caches
+    _kernel(map_rows_serial, small)
     t0 = time.perf_counter()
-    grid = _prepare_grid(setup, f, t, STEPS, "up")
+    grid = prepare_map_grid(setup, f, t, STEPS, "up")
     t_prep = time.perf_counter() - t0
-    t_ser, out_s = _kernel(_map_serial, grid)
-    t_par, out_p = _kernel(_map_parallel, grid)
+    t_ser, out_s = _kernel(map_rows_serial, grid)
+    t_par, out_p = _kernel(map_rows_parallel, grid)
     same = all(
         np.array_equal(a, b, equal_nan=a.dtype.kind == "f")
         for a, b in zip(out_s, out_p, strict=True)

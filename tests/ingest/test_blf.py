@@ -16,15 +16,15 @@ from pathlib import Path
 import can
 import numpy as np
 import pytest
+from conftest import REALDATA
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rigtools.errors import RecordingFormatError
-from rigtools.ingest import blf
-from rigtools.ingest.frames import CanFrameBatch, concat
+from rigtools.ingest.can import blf
+from rigtools.ingest.can.frames import CanFrameBatch, concat
 from rigtools.ingest.recording import IngestReport
 
-REALDATA = Path(__file__).resolve().parents[2].parent / "shared" / "realdata"
 PYCAN_DATA = REALDATA / "python-can"
 
 FD_LENGTHS = [0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64]
@@ -173,12 +173,6 @@ def _mixed_messages(n: int = 600, seed: int = 0) -> list[can.Message]:
 # -- format detection and header ----------------------------------------------------------------
 
 
-def test_sniff_recognises_the_blf_signature_only():
-    assert blf.sniff(b"LOGG" + b"\x00" * 140)
-    assert not blf.sniff(b"(1700000000.000000) can0 123#00")
-    assert not blf.sniff(b"")
-
-
 @pytest.mark.parametrize(
     ("content", "match"),
     [
@@ -236,10 +230,8 @@ def test_real_files_match_python_can_frame_for_frame(name):
     assert all(k.startswith("blf_object_type_") for k in other), report.rejected
 
 
-def test_real_file_quirks_are_decided_and_reported():
+def test_real_file_quirks_are_decided_and_reported(realdata):
     """python-can's fixtures: classic DLC 51 kept as 8 bytes (warned), error DLC 102 counted."""
-    if not PYCAN_DATA.is_dir():
-        pytest.skip(f"third-party folder {PYCAN_DATA} is absent")
     batch, report = read_blf(PYCAN_DATA / "test_CanMessage.blf")
     assert batch.length.tolist() == [8, 8]
     assert [m.dlc for m in pycan_messages(PYCAN_DATA / "test_CanMessage.blf")] == [51, 51]
@@ -533,7 +525,7 @@ def test_unknown_compression_method_is_counted():
 def test_broken_gzip_wrapper_counts_the_loss(tmp_path, damaged_source):
     import gzip
 
-    from rigtools.ingest.registry import open_source
+    from rigtools.ingest.files import open_source
 
     raw, whole = damaged_source
     path = tmp_path / "f.blf.gz"

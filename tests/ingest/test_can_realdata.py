@@ -27,14 +27,15 @@ import can
 import cantools
 import numpy as np
 import pytest
+from conftest import REALDATA
 
 from rigtools.errors import DbcError
-from rigtools.ingest import registry as reg
-from rigtools.ingest.dbc import decode_signal, load_dbc, multiplex_mask
-from rigtools.ingest.frames import CanFrameBatch, concat, from_messages
+from rigtools.ingest.can.dbc import decode_signal, load_dbc, multiplex_mask
+from rigtools.ingest.can.frames import CanFrameBatch, concat, from_messages
+from rigtools.ingest.files import open_source
 from rigtools.ingest.recording import IngestReport
+from rigtools.ingest.registry import CAN_READERS, detect_format
 
-REALDATA = Path(__file__).resolve().parents[2].parent / "shared" / "realdata"
 PYCAN = REALDATA / "python-can"
 DBCS = REALDATA / "cantools-dbc"
 
@@ -56,8 +57,8 @@ BAD_DBCS = {"bad_message_length.dbc", "issue_63.dbc", "issue_199.dbc", "issue_19
 
 def read(path: Path, fmt: str) -> tuple[CanFrameBatch, IngestReport]:
     report = IngestReport()
-    with reg.open_source(path) as stream:
-        batches = list(reg.reader_module(fmt).iter_batches(stream, str(path), report))
+    with open_source(path) as stream:
+        batches = list(CAN_READERS[fmt].iter_batches(stream, str(path), report))
     return (concat(batches) if batches else CanFrameBatch.empty(position_unit="line")), report
 
 
@@ -95,7 +96,7 @@ def test_folder_holds_what_source_md_lists() -> None:
 @needs_pycan
 @pytest.mark.parametrize("path", LOGS, ids=[p.name for p in LOGS])
 def test_log_reads_like_python_can(path: Path) -> None:
-    fmt = reg.detect_format(path)
+    fmt = detect_format(path)
     assert fmt == ("trc" if path.name.endswith(".trc") else "asc")
     got, report = read(path, fmt)
     data, n_err, n_rtr = python_can(path)
@@ -173,7 +174,7 @@ def test_same_frames_across_asc_gz_and_trc(tz) -> None:
     asc_path = PYCAN / "test_CanMessage.asc"
     gz_path = PYCAN / "test_CanMessage.asc.gz"
     trc_path = PYCAN / "test_CanMessage.trc"
-    assert [reg.detect_format(p) for p in (asc_path, gz_path, trc_path)] == ["asc", "asc", "trc"]
+    assert [detect_format(p) for p in (asc_path, gz_path, trc_path)] == ["asc", "asc", "trc"]
     # Both formats carry the start: the ASC its "Begin Triggerblock Sat Sep 30 10:06:13.191 PM
     # 2017" (which wins over its "date Sam Sep 30 15:06:13.191 2017" header line), the TRC
     # ";$STARTTIME=43008.920986006946" (days since 1899-12-30, 22:06:13.191). python-can reads
@@ -215,7 +216,7 @@ def test_blf_twin_via_python_can_and_rigtools() -> None:
     ``test_CanMessage.blf`` is python-can's BLF fixture for the same test, but it does not
     hold the ASC/TRC frames (it holds two frames of id 0x4444444 with DLC 51, channel 4368).
     It is compared with python-can's BLFReader, the reference, and with rigtools' own BLF
-    reader when that module is present.
+    reader.
     """
     path = PYCAN / "test_CanMessage.blf"
     with can.BLFReader(str(path)) as r:
@@ -224,10 +225,6 @@ def test_blf_twin_via_python_can_and_rigtools() -> None:
     a, _ = read(PYCAN / "test_CanMessage.asc", "asc")
     assert ref_batch.arbitration_id.tolist() == [0x4444444, 0x4444444]
     assert not set(ref_batch.arbitration_id.tolist()) & set(a.arbitration_id.tolist())
-    try:
-        reg.reader_module("blf")
-    except ModuleNotFoundError:
-        pytest.skip("rigtools.ingest.blf not written yet")
     got, _ = read(path, "blf")
     assert got.equals(ref_batch)
 
@@ -276,7 +273,7 @@ def test_dbc_folder_split_matches_source_md() -> None:
 
 
 def _put_raw(row: bytearray, signal: object, value: int) -> None:
-    """Write a raw signal value into a payload (independent of rigtools.ingest.dbc).
+    """Write a raw signal value into a payload (independent of rigtools.ingest.can.dbc).
 
     Little endian: the value's bits sit at ``start .. start+length-1`` of the payload read as
     one little-endian integer. Big endian: ``start`` is the MSB in DBC sawtooth numbering;

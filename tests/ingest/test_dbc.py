@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rigtools.errors import DbcError
-from rigtools.ingest.dbc import decode_signal, load_dbc, raw_signal
+from rigtools.ingest.can.dbc import decode_signal, load_dbc, raw_signal
 from rigtools.schemas import schema_path
 
 

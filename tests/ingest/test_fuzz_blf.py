@@ -445,21 +445,21 @@ def test_whole_object_straddling_the_parse_buffer_is_not_taken_for_a_size_lie():
     then read as a lying size field and a false corrupt_object. Now such an object waits for
     the rest of its bytes; only at the end of the data is it scanned.
     """
-    from rigtools.ingest.blf_objects import _Origin, _Parser
+    from rigtools.ingest.can.blf_objects import ContainerOrigin, ObjectParser
     from rigtools.ingest.recording import IngestReport
 
     inner = _OBJ.pack(b"LOBJ", 32, 1, 64, 1)  # a plausible header inside the payload
     size = 200
     obj = _OBJ.pack(b"LOBJ", 32, 1, size, 1) + bytes(16) + inner
     obj += bytes(size - len(obj))
-    origin = _Origin(np.array([0]), np.array([_HEADER]))
+    origin = ContainerOrigin(np.array([0]), np.array([_HEADER]))
     report = IngestReport()
-    walker = _Parser("x.blf", report, 0.0, 1 << 20)
+    walker = ObjectParser("x.blf", report, 0.0, 1 << 20)
     assert walker.walk(obj[:120], origin, final=False) is None
     assert walker.stop == 0 and report.n_rejected == 0  # waits for the rest
     walked = walker.walk(obj + _OBJ.pack(b"LOBJ", 32, 1, 48, 1), origin, final=False)
     assert walked is not None and walked[0].tolist() == [0] and report.n_rejected == 0
     cut = IngestReport()
-    walker = _Parser("x.blf", cut, 0.0, 1 << 20)
+    walker = ObjectParser("x.blf", cut, 0.0, 1 << 20)
     walker.walk(obj[:120], origin, final=True)  # no more data: the size cannot be right
     assert cut.rejected["corrupt_object"] >= 1

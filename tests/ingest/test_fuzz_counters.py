@@ -30,7 +30,7 @@ from hypothesis import strategies as st
 
 from rigtools.demo.can_writer import encode_reference_frames, quantise_reference, write_can_log
 from rigtools.ingest import read
-from rigtools.ingest.frames import CanFrameBatch
+from rigtools.ingest.can.frames import CanFrameBatch
 from rigtools.ingest.timebase import RESTART_RUN, unwrap_counter
 
 FAST = settings(

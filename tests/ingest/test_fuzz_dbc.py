@@ -30,7 +30,7 @@ from hypothesis import strategies as st
 
 from rigtools.errors import DbcError, RigtoolsError
 from rigtools.ingest import read
-from rigtools.ingest.dbc import load_dbc
+from rigtools.ingest.can.dbc import load_dbc
 
 FAST = settings(
     max_examples=25,

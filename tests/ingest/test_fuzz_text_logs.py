@@ -296,7 +296,7 @@ def test_long_profile(fmt, frac, flips, op, a, width, seed):
 
 
 def test_identifier_above_29_bits_is_counted_not_a_crash(tmp_path):
-    """Atheris (tests/fuzz/fuzz_can.py) found: an id of 2**36 raised OverflowError in numpy."""
+    """Atheris (tests/fuzz/fuzz_read.py can) found: an id of 2**36 raised OverflowError in numpy."""
     data, _, _ = (None, None, None)
     p = _TMP / "bigid.csv"
     frames, _ = _source()

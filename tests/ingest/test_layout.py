@@ -6,9 +6,9 @@ import pytest
 from rigtools.errors import MappingError
 from rigtools.ingest import IngestReport, Provenance, RunMetadata
 from rigtools.ingest.builder import RecordingBuilder
-from rigtools.ingest.can_assembly import assemble_can
-from rigtools.ingest.dbc import load_dbc
-from rigtools.ingest.frames import CanFrameBatch
+from rigtools.ingest.can.assembly import assemble_can
+from rigtools.ingest.can.dbc import load_dbc
+from rigtools.ingest.can.frames import CanFrameBatch
 from rigtools.ingest.layout import can_layout, load_mapping
 from rigtools.schemas import schema_path
 

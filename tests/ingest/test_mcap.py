@@ -14,15 +14,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rigtools.demo.mcap_writer import flatten_run_metadata, write_accel_mcap, write_imu_mcap
-from rigtools.errors import MappingError
-from rigtools.ingest import RunMetadata, detect_format, read
+from rigtools.errors import MappingError, PayloadDecodeError
+from rigtools.ingest import RunMetadata, read
 from rigtools.ingest.builder import RecordingBuilder
 from rigtools.ingest.layout import ChannelMapping, SlowSpec, UniformSpec, load_mapping
-from rigtools.ingest.mcap import ingest, iter_messages, sniff
-from rigtools.ingest.mcap_decoders import (
+from rigtools.ingest.mcap import ingest, iter_messages
+from rigtools.ingest.mcap.decoders import (
     ACCEL_BATCH_FIELDS,
     IMU_SCHEMA_TEXT,
-    PayloadDecodeError,
     SchemaRecord,
     accel_batch_file_descriptor_set,
     decode_accel_batch_json,
@@ -107,7 +106,7 @@ def test_writer_embeds_the_slow_value_schema_file_and_its_points_conform(tmp_pat
     """The rigtools.SlowValue schema in a written MCAP is data_schemas/slow_value.schema.json."""
     from mcap.reader import make_reader
 
-    from rigtools.ingest.mcap_decoders import (
+    from rigtools.ingest.mcap.decoders import (
         SLOW_VALUE_SCHEMA,
         SLOW_VALUE_SCHEMA_FILE,
         SLOW_VALUE_SCHEMA_NAME,
@@ -299,19 +298,13 @@ def test_decoder_factory_answers_none_for_unknown_and_checks_protobuf_descriptor
     assert decoder_for("json", None) is None
     assert decoder_for("protobuf", SchemaRecord(1, "rigtools.AccelBatch", "protobuf",
                                                 accel_batch_file_descriptor_set())).kind == "batch"
-    from rigtools.ingest.mcap_decoders import SchemaUnusableError
+    from rigtools.errors import SchemaUnusableError
 
     with pytest.raises(SchemaUnusableError, match=r"accel_batch\.proto"):
         decoder_for("protobuf", SchemaRecord(2, "rigtools.AccelBatch", "protobuf", b"\x0a\x00"))
 
 
 # --- round trips ---------------------------------------------------------------------------
-
-
-def test_sniff_and_registry_pick_mcap(tmp_path):
-    p = write_accel_mcap(tmp_path / "run.bin", _channels(n=100))
-    assert sniff(p.read_bytes()[:16]) and not sniff(b"PAR1")
-    assert detect_format(p) == "mcap"
 
 
 @pytest.mark.parametrize("encoding", ["protobuf", "json"])
@@ -458,7 +451,7 @@ def test_slow_points_out_of_order_are_sorted_and_reported(tmp_path):
     # the writer emits in log-time order; rewrite in the given order to keep it shuffled
     from mcap.writer import Writer
 
-    from rigtools.ingest.mcap_decoders import SLOW_VALUE_SCHEMA
+    from rigtools.ingest.mcap.decoders import SLOW_VALUE_SCHEMA
 
     with open(p, "wb") as f:
         w = Writer(f)

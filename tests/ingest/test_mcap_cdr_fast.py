@@ -3,14 +3,14 @@
 The general path is the same reader decoding every message on its own (``decode_imu_cdr`` for
 ``sensor_msgs/msg/Imu``, ``mcap-ros2-support``'s decoder for every other ROS 2 type); the
 fast path reads a chunk's messages of one constant layout at once
-(:mod:`rigtools.ingest.mcap_cdr`). Every test compares the two on the same file, bit for bit,
+(:mod:`rigtools.ingest.mcap.cdr`). Every test compares the two on the same file, bit for bit,
 including the report (counts, positions, warnings), and checks that the fast path was really
 taken where it should be (so an always-declining fast path would fail). Values are also
 checked against ``mcap-ros2-support``'s own reader and decoder, an implementation independent
 of both rigtools paths.
 
 Which reference must-hold (2) of issue 11 uses: for ``sensor_msgs/msg/Imu`` the fast path must
-equal rigtools' general path, :func:`~rigtools.ingest.mcap_ros2.decode_imu_cdr`, bit for bit;
+equal rigtools' general path, :func:`~rigtools.ingest.mcap.ros2.decode_imu_cdr`, bit for bit;
 ``mcap-ros2-support`` agrees with it on every well-formed payload written here, but differs on
 three malformed kinds: PL_CDR encapsulation (rigtools rejects, mcap-ros2-support decodes),
 invalid UTF-8 in ``frame_id`` (rigtools decodes, mcap-ros2-support raises) and a payload cut
@@ -20,8 +20,6 @@ other type the general path is ``mcap-ros2-support``'s decoder itself.
 
 from __future__ import annotations
 
-import dataclasses
-import io
 import struct
 import zlib
 from pathlib import Path
@@ -30,141 +28,35 @@ from typing import Any
 import mcap_layout
 import numpy as np
 import pytest
+from cdr_paths import (
+    FS,
+    T0_NS,
+    both_paths,
+    cdr_encode,
+    imu_accel,
+    imu_file,
+    imu_rows,
+    imu_stamps,
+    lay_out,
+    raw_writer,
+)
+from conftest import REALDATA
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rigtools.demo.mcap_writer import imu_cdr_payloads, write_imu_cdr_mcap, write_imu_mcap
-from rigtools.ingest import mcap_decoders, read
-from rigtools.ingest.builder import RecordingBuilder
 from rigtools.ingest.layout import ChannelMapping, SlowSpec, UniformSpec
-from rigtools.ingest.mcap import ingest
-from rigtools.ingest.mcap_cdr import Ros2BlockDecoder, decode_imu_cdr_many
-from rigtools.ingest.mcap_container import ContainerScanner
-from rigtools.ingest.mcap_decoders import IMU_SCHEMA_TEXT, get_field, message_stamp_ns
-from rigtools.ingest.mcap_ros2 import decode_imu_cdr
-from rigtools.ingest.mcap_signal_handlers import _numeric
+from rigtools.ingest.mcap.cdr import Ros2BlockDecoder, decode_imu_cdr_many
+from rigtools.ingest.mcap.container import ContainerScanner
+from rigtools.ingest.mcap.decoders import get_field, message_stamp_ns
+from rigtools.ingest.mcap.ros2 import decode_imu_cdr
+from rigtools.ingest.mcap.signal_handlers import numeric_array
 from rigtools.ingest.recording import IngestReport
 
-REALDATA = Path(__file__).resolve().parents[2].parent / "shared" / "realdata"
 ROSBAG2 = REALDATA / "mcap-rosbag2"
-T0_NS = 1_700_000_000_000_000_000
-FS = 1000.0
 
 
-# --- the two paths ------------------------------------------------------------------------
-
-
-class _Paths:
-    """Switches the CDR fast path off (general path) or spies on it (fast path)."""
-
-    def __init__(self, monkeypatch: pytest.MonkeyPatch) -> None:
-        self.mp = monkeypatch
-        self.orig = mcap_decoders._decoder_for
-        self.taken = 0  # blocks the fast path answered
-        self.declined = 0  # blocks it left to the general decoder
-
-    def _spy(self, many: Any) -> Any:
-        def spy(*args: Any, **kwargs: Any) -> Any:
-            got = many(*args, **kwargs)
-            if got is None:
-                self.declined += 1
-            else:
-                self.taken += 1
-            return got
-
-        return spy
-
-    def general(self) -> None:
-        def plain(enc: str, schema: Any, generic: bool) -> Any:
-            dec = self.orig(enc, schema, generic)
-            if dec is not None and dec.kind in ("imu", "scalar", "generic"):
-                return dataclasses.replace(dec, decode_many=None)
-            return dec
-
-        self.mp.setattr(mcap_decoders, "_decoder_for", plain)
-
-    def fast(self) -> None:
-        def spied(enc: str, schema: Any, generic: bool) -> Any:
-            dec = self.orig(enc, schema, generic)
-            if (
-                dec is not None
-                and dec.kind in ("imu", "scalar", "generic")
-                and dec.decode_many is not None
-            ):
-                return dataclasses.replace(dec, decode_many=self._spy(dec.decode_many))
-            return dec
-
-        self.mp.setattr(mcap_decoders, "_decoder_for", spied)
-
-
-def _outcome(data: bytes, path: Path, mapping: ChannelMapping | None, source: str) -> Any:
-    """What ``read`` and ``ingest`` make of the bytes: report, channels, slow signals."""
-    path.write_bytes(data)
-    rep = IngestReport(units="messages")
-    b = RecordingBuilder(str(path), rep)
-    if source == "stream":  # not seekable: no read ahead, no index, as a pipe
-
-        class Pipe(io.RawIOBase):
-            def __init__(self) -> None:
-                self.src = io.BytesIO(data)
-
-            def readable(self) -> bool:
-                return True
-
-            def readinto(self, buf: Any) -> int:
-                chunk = self.src.read(min(len(buf), 65_536))
-                buf[: len(chunk)] = chunk
-                return len(chunk)
-
-        stream: Any = io.BufferedReader(Pipe())
-    else:
-        stream = open(path, "rb")
-    with stream:
-        try:
-            ingest(stream, str(path), b, rep, mapping)
-            blt = b.build(*_meta(str(path), rep))
-            got = (rep.to_dict(), blt.channels, blt.slow)
-        except Exception as exc:  # the same error either way
-            got = (repr(exc), {}, {})
-    try:
-        rec = read(path, mapping=mapping)
-        whole = (rec.report.to_dict(), rec.channels, rec.slow)
-    except Exception as exc:
-        whole = (repr(exc), {}, {})
-    return got, whole
-
-
-def _meta(path: str, rep: IngestReport) -> tuple[Any, Any]:
-    from rigtools.ingest.recording import Provenance, RunMetadata
-
-    return RunMetadata(run_id="r"), Provenance(path, "0" * 64, 0, "mcap", {}, rep)
-
-
-def _assert_same(a: Any, b: Any) -> None:
-    for x, y in zip(a, b, strict=True):
-        assert x[0] == y[0]
-        assert x[1].keys() == y[1].keys()
-        assert all(x[1][k].equals(y[1][k]) for k in x[1])
-        assert x[2].keys() == y[2].keys()
-        assert all(x[2][k].equals(y[2][k]) for k in x[2])
-
-
-def _both(
-    monkeypatch: pytest.MonkeyPatch,
-    tmp_path: Path,
-    data: bytes,
-    mapping: ChannelMapping | None = None,
-    source: str = "file",
-) -> tuple[Any, _Paths]:
-    """The general and the fast outcome of the same bytes, checked equal; the fast spy."""
-    paths = _Paths(monkeypatch)
-    paths.general()
-    general = _outcome(data, tmp_path / "same.mcap", mapping, source)
-    paths.fast()
-    fast = _outcome(data, tmp_path / "same.mcap", mapping, source)
-    monkeypatch.setattr(mcap_decoders, "_decoder_for", paths.orig)
-    _assert_same(general, fast)
-    return fast, paths
+# --- an independent reference: mcap's reader with mcap-ros2-support's decoder ---------------
 
 
 def _imu_reference(path: Path, topic: str = "/imu") -> tuple[np.ndarray, np.ndarray]:
@@ -183,14 +75,6 @@ def _imu_reference(path: Path, topic: str = "/imu") -> tuple[np.ndarray, np.ndar
     return np.asarray(st_, np.int64), np.asarray(acc, np.float64)
 
 
-def _stamps(n: int, fs: float = FS) -> np.ndarray:
-    return T0_NS + np.round(np.arange(n) * 1e9 / fs).astype(np.int64)
-
-
-def _accel(n: int, seed: int = 0) -> np.ndarray:
-    return np.random.default_rng(seed).standard_normal((n, 3)) * 9.81
-
-
 # --- Imu files ------------------------------------------------------------------------------
 
 
@@ -200,21 +84,21 @@ def test_imu_stream_equals_general_path_and_mcap_ros2(
     monkeypatch, tmp_path, big_endian, compression
 ):
     n = 6000
-    acc = _accel(n)
+    acc = imu_accel(n)
     acc[5, 0] = np.nan  # a NaN sample is kept as received (the builder marks it invalid)
     acc[7, 1] = -0.0
     p = write_imu_cdr_mcap(
         tmp_path / "imu.mcap",
-        _stamps(n),
+        imu_stamps(n),
         acc,
         big_endian=big_endian,
         compression=compression,
         chunk_size=64 << 10,
         scalars={"/slow/temp": (np.arange(0, 6, 0.5) + T0_NS * 1e-9, np.arange(12.0))},
     )
-    (rep, chans, slow), _whole = _both(monkeypatch, tmp_path, p.read_bytes())[0]
+    (rep, chans, slow), _whole = both_paths(monkeypatch, tmp_path, p.read_bytes())[0]
     stamps, ref = _imu_reference(p)
-    assert stamps.tolist() == _stamps(n).tolist()  # the writer wrote what it was given
+    assert stamps.tolist() == imu_stamps(n).tolist()  # the writer wrote what it was given
     np.testing.assert_array_equal(ref.view(np.int64), acc.view(np.int64))
     for k, axis in enumerate("xyz"):
         ch = chans[f"/imu/linear_acceleration.{axis}"]
@@ -228,12 +112,12 @@ def test_the_fast_path_is_taken_for_every_uniform_chunk(monkeypatch, tmp_path):
     n = 5000
     p = write_imu_cdr_mcap(
         tmp_path / "imu.mcap",
-        _stamps(n),
-        _accel(n),
+        imu_stamps(n),
+        imu_accel(n),
         chunk_size=32 << 10,
         scalars={"/slow/a": (np.arange(0, 5, 0.01) + T0_NS * 1e-9, np.arange(500.0))},
     )
-    _out, spy = _both(monkeypatch, tmp_path, p.read_bytes())
+    _out, spy = both_paths(monkeypatch, tmp_path, p.read_bytes())
     n_chunks = len(mcap_layout.chunks(p.read_bytes()))
     # every chunk: the Imu block and (in most chunks) a Float64 block, none declined
     assert spy.taken >= n_chunks and spy.declined == 0
@@ -242,82 +126,26 @@ def test_the_fast_path_is_taken_for_every_uniform_chunk(monkeypatch, tmp_path):
 def test_imu_written_by_mcap_ros2_itself(monkeypatch, tmp_path):
     """The reference writer (mcap-ros2-support) rather than rigtools' array writer."""
     n = 1500
-    t = _stamps(n) * 1e-9
+    t = imu_stamps(n) * 1e-9
     p = write_imu_mcap(
         tmp_path / "ros.mcap",
         t,
-        _accel(n, 3),
+        imu_accel(n, 3),
         chunk_size=16 << 10,
         frame_id="base_link_imu",
         log_delay_s=0.002,
         scalars={"/slow/speed": (np.arange(0, 1.5, 0.1) + t[0], np.arange(15.0) * 10)},
     )
-    ((_rep, chans, _slow), _w), spy = _both(monkeypatch, tmp_path, p.read_bytes())
+    ((_rep, chans, _slow), _w), spy = both_paths(monkeypatch, tmp_path, p.read_bytes())
     assert spy.taken > 0 and spy.declined == 0
     _stamps_ref, ref = _imu_reference(p)
     assert chans["/imu/linear_acceleration.z"].values.tolist() == ref[:, 2].tolist()
 
 
-def _raw_writer(f: Any, chunk_size: int, compression: str = "zstd", **kw: Any) -> Any:
-    from mcap.writer import CompressionType, Writer
-
-    comp = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}[
-        compression
-    ]
-    w = Writer(f, chunk_size=chunk_size, compression=comp, **kw)
-    w.start(profile="ros2", library="test")
-    return w
-
-
-def _imu_file(
-    path: Path,
-    payloads: list[bytes],
-    log_ns: list[int],
-    *,
-    chunk_size: int = 8192,
-    compression: str = "zstd",
-    extra: list[tuple[int, bytes]] | None = None,
-    n_imu_channels: int = 1,
-    **kw: Any,
-) -> Path:
-    """An Imu file of the payloads given, with Float64 messages interleaved.
-
-    Imu payloads go round robin over ``n_imu_channels`` topics; ``extra`` holds Float64
-    messages (log time, payload), put in log-time order among them.
-    """
-    with open(path, "wb") as f:
-        w = _raw_writer(f, chunk_size, compression, **kw)
-        sid = w.register_schema("sensor_msgs/msg/Imu", "ros2msg", IMU_SCHEMA_TEXT.encode())
-        cids = [w.register_channel(f"/imu{k or ''}", "cdr", sid) for k in range(n_imu_channels)]
-        fsid = w.register_schema("std_msgs/msg/Float64", "ros2msg", b"float64 data\n")
-        fcid = w.register_channel("/slow/x", "cdr", fsid)
-        ev = [(t, 0, i) for i, t in enumerate(log_ns)]
-        ev += [(t, 1, j) for j, (t, _p) in enumerate(extra or [])]
-        for t, kind, i in sorted(ev):
-            if kind == 0:
-                w.add_message(
-                    cids[i % n_imu_channels],
-                    log_time=t,
-                    data=payloads[i],
-                    publish_time=t,
-                    sequence=i,
-                )
-            else:
-                w.add_message(
-                    fcid, log_time=t, data=(extra or [])[i][1], publish_time=t, sequence=i
-                )
-        w.finish()
-    return path
-
-
-def _rows(stamps: np.ndarray, acc: np.ndarray, **kw: Any) -> list[bytes]:
-    return [r.tobytes() for r in imu_cdr_payloads(stamps, acc, **kw)]
-
-
 def test_interleaved_channels_evenly_and_unevenly(monkeypatch, tmp_path):
     n = 4000
-    stamps = _stamps(n, 2 * FS)
-    pay = _rows(stamps, _accel(n))
+    stamps = imu_stamps(n, 2 * FS)
+    pay = imu_rows(stamps, imu_accel(n))
     log = stamps.tolist()
     rng = np.random.default_rng(5)
     extra = [
@@ -326,12 +154,12 @@ def test_interleaved_channels_evenly_and_unevenly(monkeypatch, tmp_path):
             np.sort(rng.choice(stamps, 60, replace=False)) + 1, rng.standard_normal(60), strict=True
         )
     ]
-    p = _imu_file(tmp_path / "a.mcap", pay, log, n_imu_channels=2)  # taking turns
-    ((_rep, chans, _s), _w), spy = _both(monkeypatch, tmp_path, p.read_bytes())
+    p = imu_file(tmp_path / "a.mcap", pay, log, n_imu_channels=2)  # taking turns
+    ((_rep, chans, _s), _w), spy = both_paths(monkeypatch, tmp_path, p.read_bytes())
     assert spy.taken > 0 and spy.declined == 0
     assert set(chans) == {f"/imu{k}/linear_acceleration.{a}" for k in ("", "1") for a in "xyz"}
-    p = _imu_file(tmp_path / "b.mcap", pay, log, n_imu_channels=2, extra=extra)  # uneven
-    ((_rep, chans, slow), _w), spy = _both(monkeypatch, tmp_path, p.read_bytes())
+    p = imu_file(tmp_path / "b.mcap", pay, log, n_imu_channels=2, extra=extra)  # uneven
+    ((_rep, chans, slow), _w), spy = both_paths(monkeypatch, tmp_path, p.read_bytes())
     assert spy.taken > 0 and spy.declined == 0
     assert len(slow["/slow/x"]) == 60
 
@@ -343,14 +171,14 @@ def test_channels_taking_turns_with_different_layouts(monkeypatch, tmp_path):
     block has one layout.
     """
     n = 4000
-    stamps = _stamps(n, 2 * FS)
-    acc = _accel(n, 12)
+    stamps = imu_stamps(n, 2 * FS)
+    acc = imu_accel(n, 12)
     pay = [
-        _rows(stamps[i : i + 1], acc[i : i + 1], frame_id="a" if i % 2 else "imu_link_b")[0]
+        imu_rows(stamps[i : i + 1], acc[i : i + 1], frame_id="a" if i % 2 else "imu_link_b")[0]
         for i in range(n)
     ]
-    p = _imu_file(tmp_path / "t.mcap", pay, stamps.tolist(), n_imu_channels=2)
-    ((_rep, chans, _s), _w), spy = _both(monkeypatch, tmp_path, p.read_bytes())
+    p = imu_file(tmp_path / "t.mcap", pay, stamps.tolist(), n_imu_channels=2)
+    ((_rep, chans, _s), _w), spy = both_paths(monkeypatch, tmp_path, p.read_bytes())
     assert spy.taken > 0 and spy.declined == 0
     _st, ref = _imu_reference(p, "/imu1")
     assert chans["/imu1/linear_acceleration.x"].values.tolist() == ref[:, 0].tolist()
@@ -359,17 +187,17 @@ def test_channels_taking_turns_with_different_layouts(monkeypatch, tmp_path):
 def test_frame_id_lengths_varying_across_and_within_chunks(monkeypatch, tmp_path):
     """Uniform chunks take the fast path with their own frame_id length; mixed chunks fall back."""
     n = 3000
-    stamps = _stamps(n)
-    acc = _accel(n, 1)
+    stamps = imu_stamps(n)
+    acc = imu_accel(n, 1)
     names = ["imu", "imu_link", "a_much_longer_frame_name", ""]
     pay = []
     for i in range(n):
         # blocks of 700 messages per name (several chunks each), and a stretch that flips
         # name every message (mixed chunks)
         name = names[(i // 700) % 4] if i < 2400 else names[i % 2]
-        pay += _rows(stamps[i : i + 1], acc[i : i + 1], frame_id=name)
-    p = _imu_file(tmp_path / "v.mcap", pay, stamps.tolist())
-    ((_rep, chans, _s), _w), spy = _both(monkeypatch, tmp_path, p.read_bytes())
+        pay += imu_rows(stamps[i : i + 1], acc[i : i + 1], frame_id=name)
+    p = imu_file(tmp_path / "v.mcap", pay, stamps.tolist())
+    ((_rep, chans, _s), _w), spy = both_paths(monkeypatch, tmp_path, p.read_bytes())
     assert spy.taken > 0 and spy.declined > 0
     _st, ref = _imu_reference(p)
     assert chans["/imu/linear_acceleration.y"].values.tolist() == ref[:, 1].tolist()
@@ -388,24 +216,24 @@ def test_frame_id_lengths_varying_across_and_within_chunks(monkeypatch, tmp_path
 )
 def test_one_odd_message_in_a_chunk(monkeypatch, tmp_path, odd):
     n = 2000
-    stamps = _stamps(n)
-    acc = _accel(n, 2)
-    pay = _rows(stamps, acc)
+    stamps = imu_stamps(n)
+    acc = imu_accel(n, 2)
+    pay = imu_rows(stamps, acc)
     k = 1234
     if odd == "longer_frame":
-        pay[k] = _rows(stamps[k : k + 1], acc[k : k + 1], frame_id="imu_link_2")[0]
+        pay[k] = imu_rows(stamps[k : k + 1], acc[k : k + 1], frame_id="imu_link_2")[0]
     elif odd == "short_payload":
         pay[k] = pay[k][:100]
     elif odd == "bad_encapsulation":
         pay[k] = b"\x00\x07" + pay[k][2:]
     elif odd == "big_endian_one":
-        pay[k] = _rows(stamps[k : k + 1], acc[k : k + 1], big_endian=True)[0]
+        pay[k] = imu_rows(stamps[k : k + 1], acc[k : k + 1], big_endian=True)[0]
     elif odd == "trailing_byte":
         pay[k] = pay[k] + b"\0"
     elif odd == "absurd_frame_length":
         pay[k] = pay[k][:12] + struct.pack("<I", 0xFFFFFFF0) + pay[k][16:]
-    p = _imu_file(tmp_path / "o.mcap", pay, stamps.tolist())
-    ((rep, _c, _s), _w), spy = _both(monkeypatch, tmp_path, p.read_bytes())
+    p = imu_file(tmp_path / "o.mcap", pay, stamps.tolist())
+    ((rep, _c, _s), _w), spy = both_paths(monkeypatch, tmp_path, p.read_bytes())
     assert spy.taken > 0 and spy.declined >= 1  # only the odd message's chunk fell back
     bad = odd in ("short_payload", "bad_encapsulation", "absurd_frame_length")
     assert rep["rejected"] == ({"decode_error": 1} if bad else {})
@@ -413,16 +241,16 @@ def test_one_odd_message_in_a_chunk(monkeypatch, tmp_path, odd):
 
 def test_stamps_with_gaps_and_duplicates_recorded_never_filled(monkeypatch, tmp_path):
     n = 3000
-    stamps = _stamps(n)
+    stamps = imu_stamps(n)
     keep = np.ones(n, bool)
     keep[1000:1010] = False  # 10 samples lost
     keep[2500] = False
     idx = np.flatnonzero(keep)
     idx = np.insert(idx, 1500, idx[1499])  # one message sent twice
     s = stamps[idx]
-    acc = _accel(n, 4)[idx]
-    p = _imu_file(tmp_path / "g.mcap", _rows(s, acc), (s + 5000).tolist())
-    ((_rep, chans, _s), whole), spy = _both(monkeypatch, tmp_path, p.read_bytes())
+    acc = imu_accel(n, 4)[idx]
+    p = imu_file(tmp_path / "g.mcap", imu_rows(s, acc), (s + 5000).tolist())
+    ((_rep, chans, _s), whole), spy = both_paths(monkeypatch, tmp_path, p.read_bytes())
     assert spy.taken > 0 and spy.declined == 0
     ch = chans["/imu/linear_acceleration.x"]
     assert len(ch) == n and ch.sample_rate_Hz == FS
@@ -440,9 +268,9 @@ def test_stamps_with_gaps_and_duplicates_recorded_never_filled(monkeypatch, tmp_
 
 def test_all_zero_header_stamps_use_log_times_on_both_paths(monkeypatch, tmp_path):
     n = 1200
-    pay = _rows(np.zeros(n, np.int64), _accel(n, 6))
-    p = _imu_file(tmp_path / "z.mcap", pay, _stamps(n).tolist())
-    ((rep, chans, _s), _w), spy = _both(monkeypatch, tmp_path, p.read_bytes())
+    pay = imu_rows(np.zeros(n, np.int64), imu_accel(n, 6))
+    p = imu_file(tmp_path / "z.mcap", pay, imu_stamps(n).tolist())
+    ((rep, chans, _s), _w), spy = both_paths(monkeypatch, tmp_path, p.read_bytes())
     assert spy.taken > 0
     assert any("all zero" in w for w in rep["warnings"])
     assert chans["/imu/linear_acceleration.x"].sample_rate_Hz == FS
@@ -493,8 +321,8 @@ def damage_sources(tmp_path_factory) -> dict[str, bytes]:
     for comp in ("zstd", "none"):
         out[comp] = write_imu_cdr_mcap(
             d / f"{comp}.mcap",
-            _stamps(n),
-            _accel(n, 7),
+            imu_stamps(n),
+            imu_accel(n, 7),
             compression=comp,
             chunk_size=48 << 10,
             scalars=sc,
@@ -519,7 +347,7 @@ def damage_sources(tmp_path_factory) -> dict[str, bytes]:
 def test_damage_counts_and_keeps_the_same(monkeypatch, tmp_path, damage_sources, kind, source):
     comp = "none" if kind.startswith("message_length") else "zstd"
     data = _damage(damage_sources[comp], kind)
-    ((rep, chans, _s), _w), spy = _both(monkeypatch, tmp_path, data, source=source)
+    ((rep, chans, _s), _w), spy = both_paths(monkeypatch, tmp_path, data, source=source)
     assert spy.taken > 0
     if kind == "intact":
         assert not rep["rejected"] and len(chans["/imu/linear_acceleration.x"]) == 3000
@@ -535,10 +363,10 @@ def test_unindexed_file_without_summary(monkeypatch, tmp_path):
     from mcap.writer import IndexType
 
     n = 2500
-    stamps = _stamps(n)
-    p = _imu_file(
+    stamps = imu_stamps(n)
+    p = imu_file(
         tmp_path / "u.mcap",
-        _rows(stamps, _accel(n, 8)),
+        imu_rows(stamps, imu_accel(n, 8)),
         stamps.tolist(),
         index_types=IndexType.NONE,
         repeat_channels=False,
@@ -547,12 +375,12 @@ def test_unindexed_file_without_summary(monkeypatch, tmp_path):
         use_statistics=False,
     )
     data = p.read_bytes()
-    ((rep, chans, _s), _w), spy = _both(monkeypatch, tmp_path, data, source="stream")
+    ((rep, chans, _s), _w), spy = both_paths(monkeypatch, tmp_path, data, source="stream")
     assert spy.taken > 0 and not rep["rejected"]
     assert len(chans["/imu/linear_acceleration.x"]) == n
     # cut short after a few chunks (no summary to lean on): the same intact part either way
     cs = mcap_layout.chunks(data)
-    ((rep, chans, _s), _w), _spy = _both(
+    ((rep, chans, _s), _w), _spy = both_paths(
         monkeypatch, tmp_path, data[: cs[3]["pos"] + 50], source="stream"
     )
     assert 0 < len(chans["/imu/linear_acceleration.x"]) < n
@@ -602,24 +430,6 @@ PROBE_PATHS = [
 ]
 
 
-def _encode(schema_name: str, schema_text: str, msg: dict, big_endian: bool) -> bytes:
-    """CDR bytes by mcap-ros2-support's own serialiser, in either byte order."""
-    from mcap_ros2._cdr import CdrWriter, EncapsulationKind
-    from mcap_ros2._dynamic import _for_each_msgdef, _write_complex_type
-
-    defs: dict[str, Any] = {}
-
-    def keep(name: str, short: str, d: Any) -> None:
-        defs[name] = defs[short] = d
-
-    _for_each_msgdef(schema_name, schema_text, keep)
-    out = io.BytesIO()
-    w = CdrWriter(out, EncapsulationKind.CDR_BE if big_endian else EncapsulationKind.CDR_LE)
-    d = defs[schema_name]
-    _write_complex_type(d.msg_name, d.fields, defs, msg, w)
-    return out.getvalue()
-
-
 _f32 = st.floats(width=32, allow_nan=False)
 
 
@@ -667,18 +477,8 @@ def _probe_block(draw: Any) -> tuple[list[bytes], bool]:
                 draw(st.sampled_from(["", "a", "probe", "zürich", "ZÜRICH"])),
                 draw(st.sampled_from(["", "imu_link", "base", "bbse"])),
             )
-        msgs.append(_encode(PROBE_NAME, PROBE_SCHEMA, draw(_probe(*shape)), big))
+        msgs.append(cdr_encode(PROBE_NAME, PROBE_SCHEMA, draw(_probe(*shape)), big))
     return msgs, same
-
-
-def _lay_out(msgs: list[bytes], gaps: list[int]) -> tuple[bytes, np.ndarray, np.ndarray]:
-    buf, s, e = b"", [], []
-    for m, g in zip(msgs, gaps, strict=False):
-        buf += b"\xee" * g
-        s.append(len(buf))
-        buf += m
-        e.append(len(buf))
-    return buf, np.asarray(s, np.int64), np.asarray(e, np.int64)
 
 
 def _general_columns(msgs: list[bytes], paths: list[str]) -> tuple[list[Any], list[Any]]:
@@ -686,7 +486,7 @@ def _general_columns(msgs: list[bytes], paths: list[str]) -> tuple[list[Any], li
 
     dec = generate_dynamic(PROBE_NAME, PROBE_SCHEMA)[PROBE_NAME]
     objs = [dec(m) for m in msgs]
-    vals = [np.stack([_numeric(get_field(o, p)) for o in objs]) for p in paths]
+    vals = [np.stack([numeric_array(get_field(o, p)) for o in objs]) for p in paths]
     return vals, [message_stamp_ns(o) for o in objs]
 
 
@@ -699,7 +499,7 @@ def test_block_columns_equal_mcap_ros2_message_by_message(block, even, gap, data
         if even
         else data.draw(st.lists(st.integers(0, 9), min_size=len(msgs), max_size=len(msgs)))
     )
-    buf, s, e = _lay_out(msgs, gaps)
+    buf, s, e = lay_out(msgs, gaps)
     got = Ros2BlockDecoder(PROBE_NAME, PROBE_SCHEMA).columns(memoryview(buf), s, e, PROBE_PATHS)
     want, stamps = _general_columns(msgs, PROBE_PATHS)
     if same or (
@@ -728,7 +528,7 @@ def test_mapped_fields_read_equal_on_both_paths(monkeypatch, tmp_path, big_endia
     rng = np.random.default_rng(9)
     n = 1500
     with open(tmp_path / "p.mcap", "wb") as f:
-        w = _raw_writer(f, 16 << 10)
+        w = raw_writer(f, 16 << 10)
         sid = w.register_schema(PROBE_NAME, "ros2msg", PROBE_SCHEMA.encode())
         cid = w.register_channel("/probe", "cdr", sid)
         for i in range(n):
@@ -754,7 +554,7 @@ def test_mapped_fields_read_equal_on_both_paths(monkeypatch, tmp_path, big_endia
                 log_time=t + 7,
                 publish_time=t,
                 sequence=i,
-                data=_encode(PROBE_NAME, PROBE_SCHEMA, msg, big_endian),
+                data=cdr_encode(PROBE_NAME, PROBE_SCHEMA, msg, big_endian),
             )
         w.finish()
     mapping = ChannelMapping(
@@ -769,7 +569,7 @@ def test_mapped_fields_read_equal_on_both_paths(monkeypatch, tmp_path, big_endia
         ),
     )
     data = (tmp_path / "p.mcap").read_bytes()
-    ((rep, chans, slow), _w), spy = _both(monkeypatch, tmp_path, data, mapping)
+    ((rep, chans, slow), _w), spy = both_paths(monkeypatch, tmp_path, data, mapping)
     assert spy.taken > 0 and spy.declined == 0
     assert len(chans["tri"]) == 3 * n and chans["vy"].values.tolist() == list(range(n))
     assert slow["big"].values[0] == float(2**64 - 1)
@@ -830,7 +630,7 @@ def test_rosbag2_every_numeric_field_of_every_block(path):
                     assert len({_words(blockdec, m) for m in msgs}) > 1
                     continue
                 for p, col in zip(paths, got.values, strict=True):
-                    want = np.stack([_numeric(get_field(o, p)) for o in objs])
+                    want = np.stack([numeric_array(get_field(o, p)) for o in objs])
                     assert (
                         col.reshape(-1).view(np.int64).tolist()
                         == want.reshape(-1).view(np.int64).tolist()
@@ -888,7 +688,7 @@ def test_rosbag2_mapped_constant_layout_fields_take_the_fast_path(
     mapping = ChannelMapping(
         slow=tuple(SlowSpec(f"s.{f}", topic=topic, field=f, unit="1") for f in fields)
     )
-    ((rep, _c, slow), _w), spy = _both(monkeypatch, tmp_path, path.read_bytes(), mapping)
+    ((rep, _c, slow), _w), spy = both_paths(monkeypatch, tmp_path, path.read_bytes(), mapping)
     assert spy.taken > 0 and spy.declined == 0
     assert set(slow) == {f"s.{f}" for f in fields}
     assert rep["decoded"] > 0
@@ -896,7 +696,7 @@ def test_rosbag2_mapped_constant_layout_fields_take_the_fast_path(
 
 @pytest.mark.parametrize("path", _bags())
 def test_rosbag2_whole_bags_read_the_same(monkeypatch, tmp_path, path):
-    _both(monkeypatch, tmp_path, path.read_bytes())
+    both_paths(monkeypatch, tmp_path, path.read_bytes())
 
 
 def test_varying_strings_fall_back_on_real_bag(monkeypatch, tmp_path):
@@ -937,7 +737,7 @@ def test_imu_block_equals_decode_imu_cdr(n, frame, big, gaps, vals, secs):
     stamps = np.asarray(secs[:n], np.int64) * 1_000_000_000 + 999_999_999
     acc = np.asarray(vals[: 3 * n], np.float64).reshape(n, 3)
     msgs = [r.tobytes() for r in imu_cdr_payloads(stamps, acc, frame_id=frame, big_endian=big)]
-    buf, s, e = _lay_out(msgs, gaps)
+    buf, s, e = lay_out(msgs, gaps)
     got = decode_imu_cdr_many(memoryview(buf), s, e)
     assert got is not None
     want = [decode_imu_cdr(m) for m in msgs]
@@ -973,7 +773,7 @@ def test_hostile_layouts_are_left_to_the_general_decoder(monkeypatch, tmp_path, 
     with pytest.raises((RecursionError, NotImplementedError, struct.error)):
         generate_dynamic("a/msg/B", text)["a/msg/B"](payload)
     with open(tmp_path / "h.mcap", "wb") as f:
-        w = _raw_writer(f, 4096)
+        w = raw_writer(f, 4096)
         cid = w.register_channel(
             "/h", "cdr", w.register_schema("a/msg/B", "ros2msg", text.encode())
         )
@@ -981,7 +781,7 @@ def test_hostile_layouts_are_left_to_the_general_decoder(monkeypatch, tmp_path, 
             w.add_message(cid, log_time=T0_NS + i, publish_time=T0_NS + i, sequence=i, data=payload)
         w.finish()
     mapping = ChannelMapping(slow=(SlowSpec("x", topic="/h", field="x", unit="1"),))
-    ((rep, _c, _s), _w), spy = _both(
+    ((rep, _c, _s), _w), spy = both_paths(
         monkeypatch, tmp_path, (tmp_path / "h.mcap").read_bytes(), mapping
     )
     assert spy.taken == 0 and spy.declined > 0
@@ -998,8 +798,8 @@ def test_small_payloads_gathered_whole_equal_mcap_ros2(vals, gaps, big):
     """Float64 payloads (12 bytes) at uneven distances: gathered whole, read as decoded."""
     from mcap_ros2._dynamic import generate_dynamic
 
-    msgs = [_encode("std_msgs/msg/Float64", "float64 data\n", {"data": v}, big) for v in vals]
-    buf, s, e = _lay_out(msgs, gaps)
+    msgs = [cdr_encode("std_msgs/msg/Float64", "float64 data\n", {"data": v}, big) for v in vals]
+    buf, s, e = lay_out(msgs, gaps)
     got = Ros2BlockDecoder("std_msgs/msg/Float64", "float64 data\n").scalar_many(
         memoryview(buf), s, e, "data"
     )

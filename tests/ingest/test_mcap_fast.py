@@ -23,18 +23,17 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rigtools.demo.mcap_writer import write_accel_mcap
-from rigtools.ingest import mcap_container as container
 from rigtools.ingest import read
 from rigtools.ingest.builder import RecordingBuilder
-from rigtools.ingest.mcap import MAGIC, ingest, iter_messages
-from rigtools.ingest.mcap_container import ContainerScanner, MessageBlock
-from rigtools.ingest.mcap_decoders import (
+from rigtools.ingest.mcap import MAGIC, container, ingest, iter_messages
+from rigtools.ingest.mcap.container import ContainerScanner, MessageBlock
+from rigtools.ingest.mcap.decoders import (
     accel_batch_file_descriptor_set,
     decode_accel_batch_protobuf,
     decode_accel_batches_protobuf,
     encode_accel_batch_protobuf,
 )
-from rigtools.ingest.mcap_decompress import ChunkDecompressor, ChunkRefusedError
+from rigtools.ingest.mcap.decompress import ChunkDecompressor, ChunkRefusedError
 from rigtools.ingest.recording import IngestReport
 
 T0 = 1_700_000_000.0
@@ -306,7 +305,7 @@ def test_channels_taking_turns_equal_the_record_by_record_walk(period, reps, bre
 @pytest.mark.parametrize("p", [2, 3, 8])
 def test_channels_taking_turns_are_read_as_patterns(p, monkeypatch):
     """The pattern path really takes the records (no record walked one by one after it)."""
-    from rigtools.ingest import mcap_walk
+    from rigtools.ingest.mcap import walk as mcap_walk
 
     period = [("m", 1 + (j % 2), 40 + j) for j in range(p)]
     data = _file(_inner([(item, 1) for item in period] * 50), before=_schema_channels([1, 2]))
@@ -546,7 +545,7 @@ def test_full_read_of_a_larger_file_equals_the_plain_paths(tmp_path):
 
 
 def test_values_cut_from_many_slabs_are_the_same(tmp_path, monkeypatch):
-    from rigtools.ingest import mcap_handlers
+    from rigtools.ingest.mcap import handlers as mcap_handlers
 
     p = write_accel_mcap(tmp_path / "s.mcap", _chans(n=50_000, n_ch=2), batch=700,
                          chunk_size=16 << 10)
@@ -562,7 +561,7 @@ def test_values_cut_from_many_slabs_are_the_same(tmp_path, monkeypatch):
 def test_file_source_reads_by_position_and_never_past_the_data(tmp_path):
     from concurrent.futures import ThreadPoolExecutor
 
-    from rigtools.ingest.mcap_source import WINDOW_BYTES, ByteSource
+    from rigtools.ingest.mcap.source import WINDOW_BYTES, ByteSource
 
     data = bytes(range(256)) * (3 * WINDOW_BYTES // 256 + 11)
     p = tmp_path / "bytes.bin"

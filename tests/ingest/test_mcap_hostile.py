@@ -23,7 +23,7 @@ from rigtools.errors import NoDataError, RecordingFormatError
 from rigtools.ingest import read
 from rigtools.ingest.builder import RecordingBuilder
 from rigtools.ingest.mcap import MAGIC, ingest, iter_messages
-from rigtools.ingest.mcap_decoders import decode_accel_batch_protobuf
+from rigtools.ingest.mcap.decoders import decode_accel_batch_protobuf
 from rigtools.ingest.recording import IngestReport
 
 T0 = 1_700_000_000.0

@@ -10,7 +10,7 @@ import struct
 import pytest
 
 from rigtools.ingest import mcap
-from rigtools.ingest.mcap_decompress import (
+from rigtools.ingest.mcap.decompress import (
     FREE_CHUNK_BYTES,
     MAX_CHUNK_RATIO,
     MAX_CHUNK_UNCOMPRESSED_BYTES,
@@ -20,7 +20,7 @@ from rigtools.ingest.mcap_decompress import (
     check_chunk_size,
     chunk_size_limit,
 )
-from rigtools.ingest.mcap_records import (
+from rigtools.ingest.mcap.records import (
     MalformedRecordError,
     message_index_entry_count,
     parse_channel,
@@ -29,7 +29,7 @@ from rigtools.ingest.mcap_records import (
     parse_schema,
     statistics_message_count,
 )
-from rigtools.ingest.mcap_source import READ_PIECE_BYTES, ByteSource
+from rigtools.ingest.mcap.source import READ_PIECE_BYTES, ByteSource
 
 
 def _s(text: str) -> bytes:
@@ -42,11 +42,11 @@ def _map(d: dict[str, str]) -> bytes:
     return struct.pack("<I", len(body)) + body
 
 
-def test_reader_module_reexports_the_layer_constants():
+def test_reader_package_reexports_the_layer_constants():
     assert mcap.MAX_CHUNK_RATIO == MAX_CHUNK_RATIO
     assert mcap.MAX_CHUNK_UNCOMPRESSED_BYTES == MAX_CHUNK_UNCOMPRESSED_BYTES
     assert mcap.FREE_CHUNK_BYTES == FREE_CHUNK_BYTES
-    assert set(mcap.__all__) >= {"NAME", "KIND", "sniff", "ingest", "iter_messages"}
+    assert set(mcap.__all__) >= {"NAME", "READER", "sniff", "ingest", "iter_messages"}
 
 
 def test_record_parsers_read_well_formed_records():

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import REALDATA
 
 from rigtools.errors import NoDataError
 from rigtools.ingest import read
@@ -19,7 +20,6 @@ from rigtools.ingest.layout import ChannelMapping, SlowSpec, UniformSpec
 from rigtools.ingest.mcap import ingest, iter_messages
 from rigtools.ingest.recording import IngestReport
 
-REALDATA = Path(__file__).resolve().parents[2].parent / "shared" / "realdata"
 CONFORMANCE = REALDATA / "mcap-conformance"
 ROSBAG2 = REALDATA / "mcap-rosbag2"
 
@@ -36,9 +36,7 @@ def _expected_messages(mcap: Path) -> list[dict]:
     return [dict(r["fields"]) for r in doc["records"] if r["type"] == "Message"]
 
 
-def test_the_realdata_inventory_is_complete():
-    if not REALDATA.is_dir():
-        pytest.skip(f"third-party data folder {REALDATA} is absent")
+def test_the_realdata_inventory_is_complete(realdata):
     assert len(list(CONFORMANCE.rglob("*.mcap"))) == 171
     assert len(list(ROSBAG2.rglob("*.mcap"))) == 20
 
@@ -79,7 +77,7 @@ def test_ten_messages_log_times_out_of_order_are_sorted_by_the_builder(tmp_path)
         pytest.skip(f"{src} is absent")
     from mcap.writer import Writer
 
-    from rigtools.ingest.mcap_decoders import SLOW_VALUE_SCHEMA
+    from rigtools.ingest.mcap.decoders import SLOW_VALUE_SCHEMA
 
     rep = IngestReport(units="messages")
     with open(src, "rb") as f:
@@ -168,7 +166,7 @@ def test_mapped_ros2_fields_equal_mcap_ros2_decoding(bag, topic, field):
     path = ROSBAG2 / bag
     if not path.is_file():
         pytest.skip(f"{path} is absent")
-    from rigtools.ingest.mcap_decoders import get_field
+    from rigtools.ingest.mcap.decoders import get_field
 
     ref = _ros2_reference(path, topic)
     mapping = ChannelMapping(slow=(SlowSpec("probe", topic=topic, field=field, unit="1"),))

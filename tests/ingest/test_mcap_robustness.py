@@ -19,24 +19,22 @@ import numpy as np
 import pytest
 
 from rigtools.demo.mcap_writer import write_accel_mcap, write_imu_mcap
-from rigtools.errors import MappingError, NoDataError
-from rigtools.ingest import mcap_handlers as handlers
+from rigtools.errors import MappingError, NoDataError, PayloadDecodeError
 from rigtools.ingest import read
 from rigtools.ingest.builder import RecordingBuilder
 from rigtools.ingest.layout import ChannelMapping, SlowSpec, UniformSpec
-from rigtools.ingest.mcap import ingest
-from rigtools.ingest.mcap_decoders import (
+from rigtools.ingest.mcap import handlers, ingest
+from rigtools.ingest.mcap.decoders import (
     MAX_SAMPLE_RATE_HZ,
     MIN_SAMPLE_RATE_HZ,
     SLOW_VALUE_SCHEMA,
-    PayloadDecodeError,
     accel_batch_file_descriptor_set,
     decode_accel_batch_json,
     decode_accel_batch_protobuf,
     decode_slow_value_json,
     encode_accel_batch_protobuf,
 )
-from rigtools.ingest.mcap_timing import (
+from rigtools.ingest.mcap.timing import (
     nominal_rate,
     resync_counter_restarts,
     stamp_grid,
@@ -561,7 +559,7 @@ def test_gzip_mcap_cut_short_keeps_the_complete_chunks_and_counts_the_break(tmp_
 
 
 def test_ingest_through_open_source_counts_a_gzip_cut_in_the_summary(tmp_path):
-    from rigtools.ingest.registry import open_source
+    from rigtools.ingest.files import open_source
 
     p = write_accel_mcap(tmp_path / "r.mcap", {"a": (np.ones(5000, np.float32), 100.0, "g",
                                                      0, T0)}, compression="none")

@@ -2,7 +2,7 @@
 
 Each test names its source. Analytic compliances (constant, linear, parabolic) make limits
 checkable by hand; the integration tests at the end use the potential-energy compliance of
-``models.stiffness.potential_energy`` and skip while that module is not importable.
+``models.stiffness.potential_energy``.
 """
 
 import math
@@ -19,6 +19,7 @@ from models.stiffness.mesh_cycle import (
     prepare_mesh_cycle,
     tabulate_compliance,
 )
+from models.stiffness.potential_energy import pair_compliance
 from models.stiffness.tip_relief import (
     RELIEF_SHAPES,
     normalised_tip_relief,
@@ -335,16 +336,10 @@ def test_result_is_frozen():
         r.torque_Nm = 2.0  # type: ignore[misc]
 
 
-# --- with the potential-energy compliance (written in parallel) ------------------------------
+# --- with the potential-energy compliance ----------------------------------------------------
 def potential_energy_compliance(pair):
-    try:
-        from models.stiffness.potential_energy import pair_compliance
-    except Exception as exc:  # the module may be absent or half-written (written in parallel)
-        pytest.skip(f"models.stiffness.potential_energy not importable yet: {exc!r}")
-
     def comp(s):
-        out = pair_compliance(pair, s)
-        return out.total_m_per_N if hasattr(out, "total_m_per_N") else out.total
+        return pair_compliance(pair, s).total_m_per_N
 
     return comp
 

@@ -127,7 +127,10 @@ def test_compiled_and_reference_rk4_agree(cycle, kind):
     [
         ("vvms", 1.3, 0.0, 1e-6),  # parametric + mesh harmonics, in contact throughout
         ("lste", 0.7, 0.0, 1e-6),
-        ("fvms", 1.0, 0.0, 1e-6),
+        # FVMS's gear error keeps the cycle's relief kinks, so RK4 converges at first order
+        # there: 512 / 1024 / 2048 steps per period miss solve_ivp (rtol 1e-11) by 8.7e-7 /
+        # 4.0e-7 / 1.8e-7 at the fourth period; scipy 1.17's RK45 at rtol 1e-9 sits 5e-8 off.
+        ("fvms", 1.0, 0.0, 2e-6),
         ("vvms", 0.95, 0.6, 3e-5),  # contact loss: RK4 loses order at the kink
     ],
 )

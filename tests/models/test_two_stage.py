@@ -231,7 +231,7 @@ def test_cached_kernels_call_only_compiled_functions_of_their_own_file():
 
     numba's disk cache checks only the kernel's own file: a cached kernel that inlines a
     compiled function from another file keeps the stale copy after that file is edited. All
-    two-stage kernels live in two_stage_kernels (the map kernels used to call two_stage._run).
+    two-stage kernels live in two_stage_kernels (the map kernels used to call two_stage's RK4).
     """
     from numba.core.dispatcher import Dispatcher
 
@@ -246,7 +246,7 @@ def test_cached_kernels_call_only_compiled_functions_of_their_own_file():
                 if isinstance(ref, Dispatcher):
                     checked += 1
                     assert ref.py_func.__code__.co_filename == src, (obj.__name__, name)
-    assert checked >= 5  # _run -> _acc, _acc -> _dz, _fill_row -> _run, maps -> _fill_row
+    assert checked >= 5  # rk4 -> _acc, _acc -> _dz, _fill_row -> rk4, maps -> _fill_row
 
 
 def test_modes_and_damping_of_the_reduction_match_the_dimensional_three_dof_system():

@@ -18,13 +18,13 @@ import pytest
 
 from models.dynamics import two_stage_steady_response
 from models.dynamics.two_stage import natural_frequencies
-from models.dynamics.two_stage_kernels import _alloc, _map_serial
+from models.dynamics.two_stage_kernels import allocate_map_outputs, map_rows_serial
 from models.dynamics.two_stage_maps import (
     TwoStageThermalSetup,
-    _prepare_grid,
     bifurcation_over_frequency,
     bifurcation_over_temperature,
     peak_dte_map,
+    prepare_map_grid,
     thermal_stiffness_component,
     two_stage_at_temperature,
 )
@@ -429,13 +429,13 @@ def test_diverged_point_is_flagged_and_does_not_poison_the_row():
     """
     setup = TwoStageThermalSetup()
     f = np.array([3000.0, 4500.0, 6000.0])
-    grid = _prepare_grid(setup, f, np.array([60.0]), 32, "up")
+    grid = prepare_map_grid(setup, f, np.array([60.0]), 32, "up")
     grid.T[0, 1, 0, :] = -1.0
     grid.Y0[0, 1, 0] += 1e-3  # off the (unstable) static state
     res = {}
     for carry in (True, False):
-        out = _alloc(1, f.size, 4)
-        _map_serial(*grid.kernel_args(), carry, 200, 4, *out)
+        out = allocate_map_outputs(1, f.size, 4)
+        map_rows_serial(*grid.kernel_args(), carry, 200, 4, *out)
         res[carry] = out
     peak, _, _, loss, back, div, poinc = res[True]
     np.testing.assert_array_equal(div[0], [False, True, False])

@@ -13,15 +13,10 @@ from matplotlib.figure import Figure
 
 from models.dynamics import SDOFModel, sweep_up_down
 from models.dynamics.dimensional import dimensional_scaling
-from models.dynamics.sweep import SweepResult
+from models.dynamics.sweep import SweepResult, hysteresis_band, hysteresis_bands
 from models.geometry import load_gear_set
 from models.stiffness.mesh_cycle import Harmonics
-from rigtools.plots.dynamics import (
-    hysteresis_band,
-    hysteresis_bands,
-    plot_sweep,
-    plot_sweep_bifurcation,
-)
+from rigtools.plots.dynamics import plot_sweep, plot_sweep_bifurcation
 from rigtools.plots.stiffness import save_png
 
 LAM = np.linspace(0.6, 2.2, 33)

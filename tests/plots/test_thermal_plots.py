@@ -26,20 +26,20 @@ from matplotlib.lines import Line2D
 from models.geometry import load_gear_set
 from models.thermal import (
     SEED_000_CHI,
+    TABLE_6_TORQUES_NM,
+    ThermalClosure,
     critical_gap,
     mesh_natural_frequency,
     mesh_natural_frequency_scalar,
     prepare_natural_frequency,
+    seed_000_hot_state_closure,
     thermoelastic_mesh_stiffness,
 )
 from rigtools.plots import (
     FIGURE_WIDTH_IN,
-    TABLE_6_TORQUES_NM,
-    ThermalClosure,
     plot_natural_frequency_vs_load,
     plot_stiffness_vs_load,
     save_png,
-    seed_000_hot_state_closure,
     thermal_figures,
 )
 
@@ -95,19 +95,6 @@ def jam_edge(model, c_star, c):
     """Torque below which backlash ``c`` is jammed: ``r_b1 (c* - c) max_j k_EP,j / R_j``."""
     return model.base_radius_pinion_m * (c_star - c) * np.max(model.k_EP_N_per_m
                                                               / model.load_share)
-
-
-# --- the thermal closure -----------------------------------------------------------------------
-def test_closure_is_the_hot_state_of_the_reference_reading(closure, c_star):
-    # tests/models/test_thermal_expansion.py: "oil+flash", xi = 1.15e-5 /K, 302 N m
-    assert isinstance(closure, ThermalClosure)
-    assert closure.total_m * 1e6 == pytest.approx(10.58, abs=0.01)
-    lo, hi = closure.range_m
-    assert (lo * 1e6, hi * 1e6) == pytest.approx((0.42, 20.10), abs=0.01)
-    assert c_star * 1e6 == pytest.approx(10.28, abs=0.01), f"{SRC}: c* approximately 10 um"
-    for words in ("SEED-NOTES 8", "housing at the oil temperature", "flash temperature",
-                  "302 N·m", "1500 min⁻¹", "90 °C oil", "held fixed at every torque"):
-        assert words in closure.description
 
 
 # --- structure ---------------------------------------------------------------------------------

@@ -1,0 +1,93 @@
+"""The campaign stage: the manifest, observing a campaign, and the observations table.
+
+A *campaign* is the user's one description of an experiment (a TOML manifest listing runs and
+their conditions, the gear set, the sensor mapping and the thermal reference state); this
+package reads it and turns it into the one tidy table the later stages read:
+
+- :mod:`~rigtools.campaign.manifest`: :func:`load_campaign` validates the file once, at the
+  boundary, into a :class:`Campaign` (contract: ``data_schemas/campaign.schema.json``);
+- :mod:`~rigtools.campaign.thermal_reference`: :func:`thermal_reference`, the ``[thermal]``
+  block as :mod:`models.thermal`'s reference state;
+- :mod:`~rigtools.campaign.observe`: :func:`observe_campaign` reads and analyses every run
+  (:mod:`rigtools.ingest`, :mod:`rigtools.analysis`) into :class:`Observations`;
+- :mod:`~rigtools.campaign.observation_table`: the table's columns, flags and result classes;
+- :mod:`~rigtools.campaign.observation_files`: the table as Parquet (write, read, validate).
+
+:func:`observe_campaign`, :func:`observe_run` and :func:`thermal_reference` are imported on
+first use: reading a campaign or an observations table does not load the signal analysis
+(scipy.signal) or the thermal physics.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+from rigtools.campaign.manifest import (
+    CONDITION_KEYS,
+    AnalysisSettings,
+    Campaign,
+    CampaignRun,
+    Sensors,
+    Thermal,
+    load_campaign,
+)
+from rigtools.campaign.observation_files import (
+    read_observations,
+    validate_observations,
+    write_observations,
+)
+from rigtools.campaign.observation_table import (
+    FLAGS,
+    Observations,
+    RunObservations,
+    observation_columns,
+    to_frame,
+)
+from rigtools.errors import CampaignError
+
+if TYPE_CHECKING:
+    from rigtools.campaign.observe import observe_campaign, observe_run
+    from rigtools.campaign.thermal_reference import thermal_reference
+
+__all__ = [
+    "CONDITION_KEYS",
+    "FLAGS",
+    "AnalysisSettings",
+    "Campaign",
+    "CampaignError",
+    "CampaignRun",
+    "Observations",
+    "RunObservations",
+    "Sensors",
+    "Thermal",
+    "load_campaign",
+    "observation_columns",
+    "observe_campaign",
+    "observe_run",
+    "read_observations",
+    "thermal_reference",
+    "to_frame",
+    "validate_observations",
+    "write_observations",
+]
+
+#: Names whose modules load the signal analysis or the physics, imported on first access.
+_ON_FIRST_USE = {
+    "observe_campaign": "rigtools.campaign.observe",
+    "observe_run": "rigtools.campaign.observe",
+    "thermal_reference": "rigtools.campaign.thermal_reference",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _ON_FIRST_USE.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -1,0 +1,648 @@
+r"""The observations table: one tidy table per campaign, the input of calibration and reports.
+
+:func:`observe_campaign` reads every run of a :class:`~rigtools.campaign.Campaign`
+(:func:`rigtools.ingest.read`), analyses its accelerometer channels
+(:func:`~rigtools.analysis.recording.analyse_recording`: Welch PSD, RMS, natural frequencies with
+damping and uncertainties; :func:`~rigtools.analysis.orders.step_levels`: mesh harmonics and
+Arms per speed step) and collects the numbers in one long :class:`pandas.DataFrame`.
+
+Layout
+------
+A long table with a ``quantity`` column; the columns, their units and their meaning are the
+contract ``data_schemas/observations.schema.json`` (column order and dtypes come from it):
+
+==================  ==========================================================================
+quantity            rows
+==================  ==========================================================================
+``run``             one per run: conditions, duration, ingest losses, provenance; the one row
+                    of a run that could not be read (``status = "failed"``, ``message`` says
+                    why, naming the file)
+``rms``             one per run x channel: full-band RMS (time domain and Parseval) and the
+                    channel's quality (gaps, clipping, Welch windows, dropped segments)
+``natural_frequency``
+                    one per structural PSD peak of a channel (``mode_index`` 0, 1, ... by
+                    frequency): ``f_n_Hz``, ``f_n_std_Hz``, ``zeta``, ``zeta_std`` (SDOF fit),
+                    half-power damping, prominence; also a *broad* peak on a mesh or shaft line
+                    (a resonance may coincide with it), flagged ``at_mesh_line``
+``arms``            one per channel x speed step (``segment = "step"``, ``step_index``), when
+                    ``[sensors] speed`` is set: step speed, mesh frequency, amplitudes of mesh
+                    harmonics 1-3 and :math:`A_{rms} = \sqrt{A_1^2 + A_2^2 + A_3^2}`; when the
+                    speed has no plateau (a ramped run-up), one per channel x window of
+                    ``revs_per_block`` revolutions along the ramp (``segment = "ramp"``,
+                    :func:`~rigtools.analysis.orders.run_up_curve`), with the window's speed
+                    and mesh frequency
+==================  ==========================================================================
+
+Conditions (``torque_Nm``, ``bulk_temperature_C``, ``oil_temperature_C``, ``speed_rpm``),
+provenance (``source_file``, ``source_sha256``, ``reader``, ``rigtools_version``) and the
+channel's quality counts repeat on every row, so a row stands alone after any filter. Columns
+that do not apply to a row's quantity are null (NaN for floats).
+
+Quality flags
+-------------
+Four boolean columns (``flag_gaps``, ``flag_clipping``, ``flag_low_snr``,
+``flag_windows_dropped``) and the full list in ``quality_flags`` (``;``-separated, vocabulary
+:data:`~rigtools.campaign.observation_table.FLAGS`). ``status`` is ``"ok"`` (no flag),
+``"flagged"`` (a value, with flags) or ``"failed"`` (no value; ``message`` says why). A
+``run`` row is ``"flagged"`` as soon as any row of the run is failed or flagged: its flags are
+the union of theirs and its message counts them per channel. Low SNR: a natural frequency whose
+peak prominence, or a mesh harmonic whose level above the order-spectrum floor (in the same
+bandwidth), is under ``[analysis] low_snr_dB`` (default 10 dB).
+
+Failures
+--------
+A run that cannot be read or analysed becomes a failed ``run`` row and the campaign goes on.
+A channel that cannot be analysed (constant, too short, missing, unit not an acceleration)
+gets a failed ``rms`` row; a speed signal that is missing gives failed ``arms`` rows (and a
+run warning). When the speed varies beyond ``[analysis] step_rel_tolerance`` the mesh line
+sweeps the spectrum, so natural-frequency rows are flagged ``speed_varies``. Nothing is dropped
+silently.
+
+Files
+-----
+The table's columns, flags and result classes are in
+:mod:`rigtools.campaign.observation_table`; its files in
+:mod:`rigtools.campaign.observation_files`: :func:`~rigtools.campaign.write_observations`
+writes Parquet with the schema JSON in the file metadata (``rigtools.observations.schema``) and
+the resolved campaign, analysis settings and library versions (``rigtools.observations``);
+:func:`~rigtools.campaign.read_observations` reads it back and
+:func:`~rigtools.campaign.validate_observations` checks a table against the schema.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any, Final
+
+import numpy as np
+
+from models.geometry import mesh_frequency_Hz, speed_rpm_from_mesh_frequency
+from rigtools import __version__
+from rigtools.analysis.orders import (
+    RunUpCurve,
+    StepLevels,
+    run_up_curve_from_recording,
+    step_levels_from_recording,
+)
+from rigtools.analysis.recording import ChannelAnalysis, analyse_recording
+from rigtools.analysis.speed import SpeedProfile, SpeedStep, detect_speed_steps, speed_profile
+from rigtools.campaign.manifest import CONDITION_KEYS, Campaign, CampaignRun
+from rigtools.campaign.observation_table import (
+    FLAGS,
+    SCHEMA,
+    Observations,
+    RunObservations,
+    to_frame,
+)
+from rigtools.errors import MissingSpeedError, RigtoolsError
+from rigtools.ingest import RunMetadata, read
+from rigtools.ingest.reader import versions
+from rigtools.ingest.recording import Recording
+
+__all__ = ["observe_campaign", "observe_run"]
+
+
+#: Acceleration units and their factor to m/s^2.
+_ACCEL_TO_M_S2: Final[dict[str, float]] = {
+    "m/s^2": 1.0, "m/s2": 1.0, "m/s²": 1.0, "m s-2": 1.0, "m*s^-2": 1.0, "m.s-2": 1.0,
+    "mm/s^2": 1e-3, "mm/s2": 1e-3, "g": 9.80665, "g0": 9.80665, "gn": 9.80665,
+}
+_TORQUE_TO_NM: Final[dict[str, float]] = {
+    "N.m": 1.0, "Nm": 1.0, "N m": 1.0, "N·m": 1.0, "N*m": 1.0, "kN.m": 1e3, "kNm": 1e3,
+}
+_TEMPERATURE_OFFSET_C: Final[dict[str, float]] = {
+    "degC": 0.0, "°C": 0.0, "C": 0.0, "deg C": 0.0, "celsius": 0.0, "K": -273.15,
+}
+_HARMONICS: Final = (1, 2, 3)
+
+
+# --------------------------------------------------------------------------------------------
+# one run
+
+
+def _finite(v: Any) -> float | None:
+    if v is None:
+        return None
+    f = float(v)
+    return f if math.isfinite(f) else None
+
+
+def _status(row: dict[str, Any]) -> dict[str, Any]:
+    """Fill ``quality_flags``, the flag columns and ``status`` from the row's ``_flags``."""
+    flags = list(dict.fromkeys(row.pop("_flags", [])))
+    row["quality_flags"] = ";".join(flags)
+    row["flag_gaps"] = "gaps" in flags
+    row["flag_clipping"] = "clipping" in flags
+    row["flag_windows_dropped"] = "windows_dropped" in flags
+    if row.get("quantity") in ("natural_frequency", "arms"):
+        row["flag_low_snr"] = "low_snr" in flags
+    if row.get("status") != "failed":
+        row["status"] = "flagged" if flags else "ok"
+    row.setdefault("message", "")
+    return row
+
+
+def _signal_mean(rec: Recording, name: str, key: str) -> tuple[float | None, str | None]:
+    """Mean of a slow signal in the unit ``key`` names; (None, why) when it cannot be had."""
+    if key == "speed_rpm":
+        try:
+            prof = speed_profile(rec, name)
+        except (MissingSpeedError, ValueError) as exc:
+            return None, str(exc)
+        v = prof.speed_rpm[np.isfinite(prof.speed_rpm)]
+        return (float(np.mean(v)), None) if v.size else (None, f"{name!r} holds no value")
+    if name not in rec.slow:
+        return None, (f"{key} names slow signal {name!r}, not in the recording (it holds: "
+                      f"{', '.join(sorted(rec.slow)) or 'none'})")
+    s = rec.slow[name]
+    vals = np.asarray(s.values, np.float64)
+    vals = vals[np.isfinite(vals)]
+    if not vals.size:
+        return None, f"slow signal {name!r} holds no finite value"
+    unit = s.unit.strip()
+    if key == "torque_Nm":
+        if unit not in _TORQUE_TO_NM:
+            return None, (f"slow signal {name!r} is in {unit!r}, not a torque unit "
+                          f"({', '.join(_TORQUE_TO_NM)})")
+        return float(np.mean(vals)) * _TORQUE_TO_NM[unit], None
+    if unit not in _TEMPERATURE_OFFSET_C:
+        return None, (f"slow signal {name!r} is in {unit!r}, not a temperature unit "
+                      f"({', '.join(_TEMPERATURE_OFFSET_C)})")
+    return float(np.mean(vals)) + _TEMPERATURE_OFFSET_C[unit], None
+
+
+def _failed_run(base: dict[str, Any], run: CampaignRun, reason: str) -> RunObservations:
+    msg = f"{run.file}: {reason}" if str(run.file) not in reason else reason
+    row = {**base, "quantity": "run", "status": "failed", "message": msg,
+           "_flags": ["run_failed"]}
+    return RunObservations(run.id, str(run.file), (_status(row),), analysed=False, error=msg)
+
+
+def observe_run(campaign: Campaign, run: CampaignRun, *, raise_errors: bool = False
+                ) -> RunObservations:
+    """Read and analyse one run of a campaign into rows of the observations table.
+
+    Parameters
+    ----------
+    campaign : Campaign
+    run : CampaignRun
+    raise_errors : bool
+        Re-raise instead of recording a failure (for debugging).
+
+    Returns
+    -------
+    RunObservations
+        Never raises for a bad run (unless ``raise_errors``): the failure is a failed ``run``
+        row naming the file and the reason.
+    """
+    base: dict[str, Any] = {
+        "campaign": campaign.name, "run_id": run.id, "source_file": run.file_as_written,
+        "rigtools_version": __version__,
+        **{k: v for k, v in run.numeric_conditions().items()},
+    }
+    try:
+        return _observe_run(campaign, run, base)
+    except (RigtoolsError, OSError, ValueError) as exc:
+        if raise_errors:
+            raise
+        reason = str(exc)
+        if isinstance(exc, OSError) and not isinstance(exc, RigtoolsError):
+            reason = f"{exc.strerror or exc}"
+        return _failed_run(base, run, reason)
+    except Exception as exc:  # a bug: record it loudly, keep the other runs
+        if raise_errors:
+            raise
+        return _failed_run(base, run, f"internal error {type(exc).__name__}: {exc} (rerun "
+                           "with --debug for a traceback, and please report it)")
+
+
+def _observe_run(campaign: Campaign, run: CampaignRun, base: dict[str, Any]
+                 ) -> RunObservations:
+    s, a = campaign.sensors, campaign.analysis
+    meta = RunMetadata(run_id=run.id, rig=campaign.rig or None, gear_set=campaign.gear_set,
+                       conditions=run.numeric_conditions())
+    rec = read(run.file, dbc=s.dbc, mapping=s.mapping, metadata=meta)
+    prov = rec.provenance
+    base.update(source_sha256=prov.source_sha256, reader=prov.reader)
+    run_flags: list[str] = []
+    notes: list[str] = []  # problems that flag rows but do not fail the run
+
+    # conditions given as signal names
+    for key in CONDITION_KEYS:
+        v = getattr(run, key)
+        if isinstance(v, str):
+            val, why = _signal_mean(rec, v, key)
+            base[key] = val
+            if why:
+                run_flags.append("condition_unresolved")
+                notes.append(why)
+
+    # speed: the run's pinion speed, else the mean of the speed signal
+    z1, z2 = campaign.pinion_teeth, campaign.wheel_teeth
+    z_tracked = z1 if s.speed_shaft == "pinion" else z2
+    profile: SpeedProfile | None = None
+    speed_error: str | None = None
+    if s.speed is not None:
+        try:
+            profile = speed_profile(rec, s.speed, pulses_per_rev=s.pulses_per_rev)
+        except (MissingSpeedError, ValueError) as exc:
+            speed_error = str(exc)
+            run_flags.append("speed_missing")
+            notes.append(f"speed signal {s.speed!r} unusable, no Arms: {speed_error}")
+    if base.get("speed_rpm") is None and profile is not None:
+        v = profile.speed_rpm[np.isfinite(profile.speed_rpm)]
+        if v.size:
+            base["speed_rpm"] = float(np.mean(v)) * (z_tracked / z1)
+    pinion_rpm = base.get("speed_rpm")
+    f_mesh = None if pinion_rpm is None else float(mesh_frequency_Hz(pinion_rpm, z1))
+    shafts = [] if f_mesh is None else [f_mesh / z1, f_mesh / z2]  # f_shaft = f_mesh / z
+    base["mesh_frequency_Hz"] = f_mesh
+
+    # channels
+    if s.accel:
+        names = [c for c in s.accel if c in rec.channels]
+        missing = [c for c in s.accel if c not in rec.channels]
+    else:
+        names = [c for c in rec.channels if c != s.speed]
+        missing = []
+    rows: list[dict[str, Any]] = []
+    for c in missing:
+        run_flags.append("channel_missing")
+        msg = (f"channel {c!r} named in [sensors] accel is not in the recording (it holds: "
+               f"{', '.join(sorted(rec.channels)) or 'none'})")
+        notes.append(msg)
+        rows.append(_status({**base, "channel": c, "quantity": "rms", "status": "failed",
+                             "message": msg, "_flags": ["channel_missing"]}))
+    analysis = analyse_recording(
+        rec, channels=names, nperseg=a.nperseg, mesh_frequency_Hz=f_mesh,
+        shaft_frequencies_Hz=shafts, prominence_dB=a.prominence_dB, f_range_Hz=a.f_range_Hz,
+        max_peaks=a.max_peaks, response=a.response, errors="flag") if names else None
+    t0 = min((float(c.time_s[0]) if len(c) else c.start_time_s
+              for c in rec.channels.values()), default=0.0)
+    steps: tuple[SpeedStep, ...] = ()
+    if profile is not None:
+        steps = detect_speed_steps(profile, rel_tolerance=a.step_rel_tolerance,
+                                   min_duration_s=a.min_step_duration_s)
+    speed_note = None if profile is None else _speed_varies(profile, a.step_rel_tolerance, z1,
+                                                             z_tracked)
+    n_ok = 0
+    for name, ca in (analysis.channels.items() if analysis is not None else ()):
+        ch_rows, ok = _channel_rows(base, rec, ca, campaign, speed_note)
+        n_ok += ok
+        rows.extend(ch_rows)
+        if ca.error:
+            notes.append(ca.error)
+        if s.speed is not None and ok:
+            rows.extend(_arms_rows(base, rec, name, ch_rows[0], profile, speed_error, steps,
+                                   z_tracked, z1, t0, campaign))
+
+    # the run row
+    rep = rec.report
+    if rep.n_rejected:
+        run_flags.append("ingest_losses")
+    if rep.gaps:
+        run_flags.append("gaps")
+    notes.extend(rep.warnings)
+    if rep.n_rejected:
+        notes.append(f"{rep.n_rejected} {rep.units} rejected at ingest: " + ", ".join(
+            f"{n} {reason}" for reason, n in sorted(rep.rejected.items())))
+    if rep.gaps:
+        notes.append(f"{len(rep.gaps)} gap(s) in sample counters, "
+                     f"{sum(g.n_missing for g in rep.gaps)} sample(s) missing")
+    warnings = tuple(f"{run.id}: {n}" for n in notes)
+    child_flags, child_notes = _aggregate(rows)
+    run_row = {**base, "quantity": "run", "duration_s": rec.duration_s,
+               "n_gaps": len(rep.gaps), "n_rejected": rep.n_rejected,
+               "message": "; ".join([*child_notes, *notes]),
+               "_flags": [*run_flags, *child_flags]}
+    if not names or n_ok == 0:
+        why = ("no accelerometer channel in the recording" if not names and not missing else
+               "no channel could be analysed")
+        run_row.update(status="failed", _flags=[*run_flags, "run_failed"],
+                       message="; ".join([why, *notes]))
+        out = (_status(run_row), *rows)
+        return RunObservations(run.id, str(run.file), out, analysed=False,
+                               error=f"{run.file}: {run_row['message']}",
+                               warnings=warnings)
+    return RunObservations(run.id, str(run.file), (_status(run_row), *rows), analysed=True,
+                           warnings=warnings)
+
+
+def _speed_varies(profile: SpeedProfile, rel_tolerance: float, z1: int, z_tracked: int
+                  ) -> str | None:
+    """Why the mesh line is smeared, when the speed spreads beyond the step tolerance; else None.
+
+    The tolerance is :func:`~rigtools.analysis.speed.detect_speed_steps`' (a spread of at most
+    ``2 max(2 rpm, rel_tolerance n_mid)``).
+    """
+    v = profile.speed_rpm[np.isfinite(profile.speed_rpm)]
+    if v.size < 2:
+        return None
+    lo, hi = float(np.min(v)), float(np.max(v))
+    tol = max(2.0, rel_tolerance * 0.5 * (lo + hi))
+    if hi - lo <= 2 * tol:
+        return None
+    f_lo, f_hi = mesh_frequency_Hz([lo, hi], z_tracked)  # the tracked shaft's speed
+    return (f"speed varies {lo:.0f}-{hi:.0f} rpm (beyond +-{100 * rel_tolerance:g} %): the mesh "
+            f"line sweeps {f_lo:.0f}-{f_hi:.0f} Hz, smeared over the PSD; this peak may be "
+            "the swept mesh line, not a structural mode")
+
+
+def _aggregate(rows: list[dict[str, Any]]) -> tuple[list[str], list[str]]:
+    """The flags of a run's failed or flagged rows, and one note per channel x quantity x status."""
+    flags: list[str] = []
+    groups: dict[tuple[str, str, str], list[str]] = {}
+    for r in rows:
+        if r.get("status") not in ("failed", "flagged"):
+            continue
+        fl = [f for f in r.get("quality_flags", "").split(";") if f]
+        flags.extend(fl)
+        key = (str(r.get("channel")), str(r.get("quantity")), str(r["status"]))
+        groups.setdefault(key, []).extend(fl)
+    notes = []
+    for (ch, q, st), fl in groups.items():
+        n = sum(1 for r in rows if (str(r.get("channel")), str(r.get("quantity")),
+                                    str(r.get("status"))) == (ch, q, st))
+        what = q if n == 1 else f"{n} {q} rows"
+        notes.append(f"{ch}: {what} {st} ({', '.join(dict.fromkeys(fl)) or 'see row'})")
+    return list(dict.fromkeys(flags)), notes
+
+
+def _channel_rows(base: dict[str, Any], rec: Recording, ca: ChannelAnalysis, campaign: Campaign,
+                  speed_note: str | None = None) -> tuple[list[dict[str, Any]], bool]:
+    """The rms row and the natural_frequency rows of a channel; and whether it was analysed."""
+    a = campaign.analysis
+    q = ca.quality
+    flags: list[str] = []
+    if q.n_invalid:
+        flags.append("gaps")
+    if q.clipped:
+        flags.append("clipping")
+    if q.n_segments_dropped:
+        flags.append("windows_dropped")
+    if q.constant:
+        flags.append("constant")
+    if q.too_short:
+        flags.append("too_short")
+    factor = _ACCEL_TO_M_S2.get(ca.unit.strip())
+    if factor is None:
+        flags.append("unit_not_acceleration")
+    gaps = [g for g in rec.report.gaps if g.channel == ca.name]
+    common = {
+        **base, "channel": ca.name, "n_samples": q.n_samples, "n_invalid": q.n_invalid,
+        "n_gaps": len(gaps), "n_clipped": q.clipping.n_clipped if q.clipping else None,
+    }
+    msgs = list(q.messages)
+    if factor is None:
+        msgs.append(f"unit {ca.unit!r} is not an acceleration unit rigtools converts to m/s^2 "
+                    f"({', '.join(_ACCEL_TO_M_S2)}): RMS and Arms left empty")
+    rms = {**common, "quantity": "rms", "_flags": list(flags)}
+    if ca.spectrum is None or ca.rms is None:
+        rms.update(status="failed", message=ca.error or "; ".join(msgs) or "not analysed")
+        return [_status(rms)], False
+    rms.update(
+        n_windows=q.n_windows, n_segments_dropped=q.n_segments_dropped,
+        n_samples_dropped=q.n_samples_dropped,
+        rms_m_s2=None if factor is None else float(ca.rms.rms_time) * factor,
+        rms_parseval_m_s2=None if factor is None else float(ca.rms.rms_parseval) * factor)
+    common.update(n_windows=q.n_windows, n_segments_dropped=q.n_segments_dropped,
+                  n_samples_dropped=q.n_samples_dropped)
+    rows = [rms]
+    if ca.peaks is None:
+        rms["_flags"].append("peaks_failed")
+        msgs.append(ca.error or "peak analysis failed")
+    else:
+        k = 0
+        for pk in ca.peaks.peaks:
+            if pk.mode is None or not (pk.kind == "structural" or pk.possible_resonance):
+                continue
+            m = pk.mode
+            pflags = [f for f in flags if f != "unit_not_acceleration"]
+            pmsg = []
+            loc = pk.location
+            if loc.kind is not None:
+                pflags.append("at_mesh_line")
+                pmsg.append(f"broad peak within tolerance of a {loc.kind.replace('_', ' ')} "
+                            f"({loc.expected_Hz:.1f} Hz): a resonance, the line may bias it")
+            if pk.prominence_dB < a.low_snr_dB:
+                pflags.append("low_snr")
+                pmsg.append(f"prominence {pk.prominence_dB:.1f} dB < {a.low_snr_dB:g} dB")
+            if speed_note is not None:
+                pflags.append("speed_varies")
+                pmsg.append(speed_note)
+            rows.append({
+                **common, "quantity": "natural_frequency", "mode_index": k,
+                "f_n_Hz": _finite(m.f_n_Hz), "f_n_std_Hz": _finite(m.f_n_std_Hz),
+                "zeta": _finite(m.zeta), "zeta_std": _finite(m.zeta_std),
+                "zeta_half_power": _finite(m.zeta_half_power),
+                "zeta_half_power_std": _finite(m.zeta_half_power_std),
+                "peak_kind": pk.kind, "prominence_dB": float(pk.prominence_dB),
+                "snr_dB": float(pk.prominence_dB), "message": "; ".join(pmsg),
+                "_flags": pflags})
+            k += 1
+        if k == 0:
+            rms["_flags"].append("no_structural_peak")
+    rms["message"] = "; ".join(msgs)
+    return [_status(r) for r in rows], True
+
+
+def _order_floor_snr_db(sl: StepLevels, i: int) -> float | None:
+    """Weakest mesh harmonic of step ``i`` over the order-spectrum floor, same bandwidth (dB).
+
+    The floor is the median power per bin over orders 0.5 z .. 3.5 z away from the harmonics
+    (and below the passband), scaled to the ``2 m + 1`` bins a harmonic is read over and
+    divided by the window's noise bandwidth, as the harmonic's amplitude is.
+    """
+    spec = sl.spectra[i]
+    if spec is None:
+        return None
+    o, amp = spec.order, spec.amplitude
+    z = sl.z1
+    band = 1  # step_levels' default band_bins
+    sel = (o >= 0.5 * z) & (o <= 3.5 * z) & (o <= spec.max_valid_order)
+    for h in sl.harmonics:
+        sel &= np.abs(o - h * z) > (band + 2) / spec.revolutions
+    if np.count_nonzero(sel) < 8:
+        return None
+    floor = math.sqrt(float(np.median(amp[sel] ** 2)) * (2 * band + 1) / spec.enbw_bins)
+    a = sl.amplitude[i]
+    a = a[np.isfinite(a)]
+    if not a.size or floor <= 0:
+        return None
+    return float(20 * np.log10(np.min(a) / floor))
+
+
+def _arms_rows(base: dict[str, Any], rec: Recording, name: str, rms_row: dict[str, Any],
+               profile: SpeedProfile | None, speed_error: str | None,
+               steps: tuple[SpeedStep, ...], z_tracked: int, z1: int, t0: float,
+               campaign: Campaign) -> list[dict[str, Any]]:
+    a = campaign.analysis
+    factor = _ACCEL_TO_M_S2.get(rec.channels[name].unit.strip())
+    keep = ("n_samples", "n_invalid", "n_clipped")
+    common = {**base, "channel": name, "quantity": "arms",
+              **{k: rms_row.get(k) for k in keep}}
+    ch_flags = ["clipping"] if rms_row["flag_clipping"] else []
+    if profile is None:
+        return [_status({**common, "status": "failed", "message": speed_error or "no speed",
+                         "_flags": ["speed_missing"]})]
+    if factor is None:
+        return [_status({**common, "status": "failed", "_flags": ["unit_not_acceleration"],
+                         "message": f"unit {rec.channels[name].unit!r} is not an acceleration"})]
+    if not steps:
+        return _ramp_rows(common, rec, name, profile, ch_flags, factor, z_tracked, z1, t0,
+                          campaign)
+    try:
+        sl = step_levels_from_recording(rec, name, profile, z_tracked, steps=steps,
+                                        harmonics=_HARMONICS, revs_per_block=a.revs_per_block)
+    except (RigtoolsError, ValueError) as exc:
+        return [_status({**common, "status": "failed", "message": f"Arms per step: {exc}",
+                         "_flags": ["arms_failed"]})]
+    rows = []
+    for i, st in enumerate(sl.steps):
+        flags = list(ch_flags)
+        msg = []
+        n_gaps = int(sl.n_gaps[i])
+        if n_gaps:
+            flags += ["gaps", "windows_dropped"]
+            msg.append(f"{n_gaps} stretch(es) of invalid samples or unknown speed in the step")
+        row = {**common, "segment": "step", "step_index": i, "step_start_s": st.start_s - t0,
+               "step_stop_s": st.stop_s - t0, "n_gaps": n_gaps,
+               "n_windows": int(sl.n_blocks[i])}
+        if sl.n_blocks[i] == 0:
+            flags.append("step_without_block")
+            rows.append(_status({**row, "status": "failed", "_flags": flags,
+                                 "message": "; ".join([*msg, "no whole block of "
+                                                       f"{sl.revs_per_block} revolutions"])}))
+            continue
+        amp = sl.amplitude[i] * factor
+        if not np.all(np.isfinite(amp)):
+            flags.append("above_passband")
+            msg.append("a mesh harmonic lies above the resampler's passband (NaN)")
+        snr = _order_floor_snr_db(sl, i)
+        if snr is not None and snr < a.low_snr_dB:
+            flags.append("low_snr")
+            msg.append(f"weakest mesh harmonic {snr:.1f} dB over the floor < {a.low_snr_dB:g} dB")
+        f_mesh = float(sl.mesh_frequency_Hz[i])
+        rows.append(_status({
+            **row, "mesh_frequency_Hz": f_mesh,
+            "step_speed_rpm": float(speed_rpm_from_mesh_frequency(f_mesh, z1)),
+            "a1_m_s2": _finite(amp[0]), "a2_m_s2": _finite(amp[1]), "a3_m_s2": _finite(amp[2]),
+            "arms_m_s2": _finite(sl.arms[i] * factor), "snr_dB": snr,
+            "message": "; ".join(msg), "_flags": flags}))
+    return rows
+
+
+def _ramp_snr_db(rc: RunUpCurve, i: int) -> float | None:
+    """:func:`_order_floor_snr_db` for window ``i`` of a run-up curve."""
+    o = np.asarray(rc.spectra.axis, np.float64)
+    amp = np.asarray(rc.spectra.amplitude, np.float64)
+    amp = amp[i] if amp.shape[0] == len(rc.time_s) else amp[:, i]
+    z, band, revs = rc.z1, 1, rc.revs_per_window
+    n = revs * rc.samples_per_rev
+    w = np.hanning(n + 1)[:-1] if n > 1 else np.ones(1)
+    enbw = float(n * np.sum(w**2) / np.sum(w) ** 2)
+    sel = (o >= 0.5 * z) & (o <= 3.5 * z) & np.isfinite(amp)
+    for h in rc.harmonics:
+        sel &= np.abs(o - h * z) > (band + 2) / revs
+    if np.count_nonzero(sel) < 8:
+        return None
+    floor = math.sqrt(float(np.median(amp[sel] ** 2)) * (2 * band + 1) / enbw)
+    a = rc.amplitude[i]
+    a = a[np.isfinite(a)]
+    if not a.size or floor <= 0:
+        return None
+    return float(20 * np.log10(np.min(a) / floor))
+
+
+def _ramp_rows(common: dict[str, Any], rec: Recording, name: str, profile: SpeedProfile,
+               ch_flags: list[str], factor: float, z_tracked: int, z1: int, t0: float,
+               campaign: Campaign) -> list[dict[str, Any]]:
+    """Arms per window along a speed without plateau (a ramped run-up), ``segment = "ramp"``."""
+    a = campaign.analysis
+    try:
+        rc = run_up_curve_from_recording(rec, name, profile, z_tracked, harmonics=_HARMONICS,
+                                         revs_per_window=a.revs_per_block)
+    except (RigtoolsError, ValueError) as exc:
+        return [_status({**common, "segment": "ramp", "status": "failed",
+                         "message": f"no speed plateau; Arms along the ramp: {exc}",
+                         "_flags": ["arms_failed"]})]
+    if not len(rc.time_s):
+        dropped = ", ".join(f"{n} {why}" for why, n in sorted(rc.dropped.items()))
+        return [_status({**common, "segment": "ramp", "status": "failed",
+                         "message": f"no speed plateau, and no whole window of "
+                         f"{rc.revs_per_window} revolutions along the ramp"
+                         + (f" (dropped: {dropped})" if dropped else ""),
+                         "_flags": ["no_speed_step", "arms_failed"]})]
+    rows = []
+    for i in range(len(rc.time_s)):
+        flags = list(ch_flags)
+        msg = []
+        amp = rc.amplitude[i] * factor
+        if not np.all(np.isfinite(amp)):
+            flags.append("above_passband")
+            msg.append("a mesh harmonic lies above the resampler's passband (NaN)")
+        snr = _ramp_snr_db(rc, i)
+        if snr is not None and snr < a.low_snr_dB:
+            flags.append("low_snr")
+            msg.append(f"weakest mesh harmonic {snr:.1f} dB over the floor < {a.low_snr_dB:g} dB")
+        f_mesh = float(rc.mesh_frequency_Hz[i])  # z_tracked n_tracked / 60 = z1 n_pinion / 60
+        half = 0.5 * rc.revs_per_window * 60.0 / float(rc.speed_rpm[i])
+        t = float(rc.time_s[i]) - t0
+        rows.append(_status({
+            **common, "segment": "ramp", "step_index": i, "step_start_s": t - half,
+            "step_stop_s": t + half, "n_windows": 1, "n_gaps": 0,
+            "mesh_frequency_Hz": f_mesh,
+            "step_speed_rpm": float(speed_rpm_from_mesh_frequency(f_mesh, z1)),
+            "a1_m_s2": _finite(amp[0]), "a2_m_s2": _finite(amp[1]), "a3_m_s2": _finite(amp[2]),
+            "arms_m_s2": _finite(rc.arms[i] * factor), "snr_dB": snr,
+            "message": "; ".join(msg), "_flags": flags}))
+    return rows
+
+
+# --------------------------------------------------------------------------------------------
+# a campaign
+
+
+def observe_campaign(campaign: Campaign, *,
+                     on_run: Callable[[RunObservations], None] | None = None,
+                     raise_errors: bool = False) -> Observations:
+    """Observations of every run of a campaign.
+
+    Parameters
+    ----------
+    campaign : Campaign
+    on_run : callable, optional
+        Called with each run's :class:`RunObservations` as it is done (progress, reporting).
+    raise_errors : bool
+        Re-raise a run's error instead of recording it.
+
+    Returns
+    -------
+    Observations
+        Failed runs are in the table (a failed ``run`` row) and in ``failures``.
+    """
+    runs = []
+    for run in campaign.runs:
+        r = observe_run(campaign, run, raise_errors=raise_errors)
+        runs.append(r)
+        if on_run is not None:
+            on_run(r)
+    rows = [row for r in runs for row in r.rows]
+    return Observations(table=to_frame(rows), runs=tuple(runs),
+                        metadata=_metadata(campaign, runs))
+
+
+def _metadata(campaign: Campaign, runs: list[RunObservations]) -> dict[str, Any]:
+    return {
+        "format": "rigtools observations",
+        "schema": f"data_schemas/{SCHEMA}",
+        "campaign": campaign.to_dict(),
+        "gear": {"name": campaign.gear.name, "z1": campaign.pinion_teeth,
+                 "z2": campaign.wheel_teeth},
+        "harmonics": list(_HARMONICS),
+        "flags": FLAGS,
+        "versions": versions(),
+        "runs": [{"id": r.run_id, "file": r.file, "analysed": r.analysed, "error": r.error}
+                 for r in runs],
+    }
