@@ -16,7 +16,10 @@ the CLI) can tell "rigtools refused this input, here is why" from a bug::
     ├── SignalError (ValueError)            a signal cannot be analysed as asked (argument, channel)
     │   ├── InsufficientDataError           too short for the requested resolution
     │   └── ConstantSignalError             every valid sample has the same value
-    └── MissingSpeedError (LookupError)     order analysis needs a speed the recording lacks
+    ├── MissingSpeedError (LookupError)     order analysis needs a speed the recording lacks
+    └── CalibrationError                    the data cannot be calibrated as asked, naming the
+                                            run or key (rigtools.calibration.errors: it carries
+                                            the calibration's own fields)
 
     models.ModelError (ValueError)          the physics refuses its inputs (re-exported here)
     ├── models.GeometryError                impossible gear geometry, naming the parameter

@@ -1,8 +1,8 @@
 """Shared fixtures: the third-party data folder, skipped cleanly when absent.
 
 :data:`REALDATA` is the one definition of where it lives; tests that list its files when they
-are collected (``parametrize``) import it (``from conftest import REALDATA``), every other test
-takes the :func:`realdata` fixture.
+are collected (``parametrize``) import it from :mod:`realdata_path`, every other test takes the
+:func:`realdata` fixture.
 """
 
 from __future__ import annotations
@@ -10,9 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-
-PROJECT_ROOT = Path(__file__).resolve().parents[1]
-REALDATA = PROJECT_ROOT.parent / "shared" / "realdata"
+from realdata_path import REALDATA
 
 
 @pytest.fixture(scope="session")

@@ -55,8 +55,11 @@ from rigtools.analysis.recording import (
     ChannelAnalysis,
     QualityFlags,
     RecordingAnalysis,
+    ResponseSpec,
     analyse_recording,
+    response_for_unit,
 )
+from rigtools.analysis.sdof_fit import FIT_FLAGS
 from rigtools.analysis.spectra import (
     AmplitudeSpectrum,
     BandRMS,
@@ -91,6 +94,7 @@ from rigtools.errors import (
 )
 
 __all__ = [
+    "FIT_FLAGS",
     "RESAMPLER_PASSBAND",
     "AmplitudeSpectrum",
     "AngleSignal",
@@ -109,6 +113,7 @@ __all__ = [
     "PeakAnalysis",
     "QualityFlags",
     "RecordingAnalysis",
+    "ResponseSpec",
     "RunUpCurve",
     "SDOFFit",
     "Segments",
@@ -138,6 +143,7 @@ __all__ = [
     "order_campbell",
     "order_spectrum",
     "resample_to_angle",
+    "response_for_unit",
     "rms_from_psd",
     "run_up_curve",
     "run_up_curve_from_recording",

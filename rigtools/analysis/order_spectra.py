@@ -14,27 +14,45 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import signal as sps
+from scipy.special import digamma
 
 from rigtools.analysis.resample import RESAMPLER_PASSBAND, AngleSignal, resample_to_angle
 from rigtools.analysis.signal_checks import as_1d, check_int, check_positive
 from rigtools.analysis.speed_types import SpeedProfile
 
 __all__ = [
+    "FLOOR_HALF_WIDTH_ORDERS",
+    "MIN_FLOOR_BINS",
+    "QUADRATIC_FLOOR_BINS",
     "Block",
     "Campbell",
     "OrderSpectrum",
     "acceleration_to_displacement",
     "aligned_blocks",
     "block_amplitudes",
+    "block_floors",
     "block_harmonics",
     "block_spectra",
     "blocks_to_displacement",
     "check_samples_per_rev",
+    "floor_bins",
     "harmonic_amplitudes",
     "order_spectrum",
     "order_window",
     "order_windows",
+    "subtract_floor",
 ]
+
+
+#: The local floor under a harmonic is read from the order bins up to this many orders each
+#: side of its readout band.
+FLOOR_HALF_WIDTH_ORDERS = 2.0
+#: Fewer floor bins than half this on either side of a harmonic: no floor is subtracted (NaN
+#: floor). From that many on the floor's log is fitted by a straight line across the band,
+#: from half ``QUADRATIC_FLOOR_BINS`` on each side by a parabola (the curved skirt of a
+#: resonance).
+MIN_FLOOR_BINS = 4
+QUADRATIC_FLOOR_BINS = 8
 
 
 # --- results ----------------------------------------------------------------------
@@ -266,17 +284,49 @@ def order_spectrum(
         max_valid_order=RESAMPLER_PASSBAND * p, window=window)
 
 
+def floor_bins(k0: int, band: int, revs: int, n_bins: int,
+               others: Sequence[int] = ()) -> np.ndarray:
+    """Order bins the local floor under a harmonic at bin ``k0`` is read from.
+
+    Bins from ``max(band + 2, revs / 2)`` (half an order: clear of the harmonic's own
+    leakage when the speed is not quite right) to ``band + 1 + W`` away from ``k0`` on both
+    sides, ``W = FLOOR_HALF_WIDTH_ORDERS x revs``, inside ``(0, n_bins)``, leaving out every
+    bin within ``band`` of an integer order (shaft harmonics, mesh harmonics and their
+    sidebands are lines at integer orders) and within ``band + 1`` of the bins in ``others``
+    (other harmonics read).
+    """
+    w = max(round(FLOOR_HALF_WIDTH_ORDERS * revs), 2)
+    guard = max(band + 2, -(-revs // 2))
+    j = np.arange(k0 - band - 1 - w, k0 + band + 2 + w)
+    keep = (np.abs(j - k0) >= guard) & (j > 0) & (j < n_bins)
+    r = np.mod(j, revs)
+    keep &= np.minimum(r, revs - r) > band
+    for k in others:
+        keep &= np.abs(j - int(k)) > band + 1
+    return j[keep]
+
+
 def harmonic_amplitudes(
     spectrum: OrderSpectrum,
     orders: Sequence[float] | np.ndarray,
     *,
     band_bins: int = 1,
+    floor: bool = True,
 ) -> np.ndarray:
-    r"""Amplitudes of given orders, read over ``+-band_bins`` bins (energy sum).
+    r"""Amplitudes of given orders, read over ``+-band_bins`` bins (energy sum), floor removed.
 
-    :math:`A = \sqrt{\sum_{|k-k_0| \le m} \hat A_k^2 / B_{en}}` with the window's equivalent
-    noise bandwidth ``B_en`` (bins): a pure order on its bin reads its amplitude exactly when
-    ``band_bins`` covers its main lobe (1 for Hann, 0 for a rectangular window).
+    .. math::
+
+        A = \sqrt{\Big(\sum_{|k-k_0| \le m} \hat A_k^2
+            - (2m+1)\,\overline{\hat A_j^2}\Big) / B_{en}}
+
+    with the window's equivalent noise bandwidth ``B_en`` (bins): a pure order on its bin
+    reads its amplitude exactly when ``band_bins`` covers its main lobe (1 for Hann, 0 for a
+    rectangular window). The broadband response under the band (the skirt of a resonance,
+    noise) adds its power to the harmonic's, the two being incoherent: the local floor
+    under the band, :math:`(2m+1)\,\overline{\hat A_j^2}` (:func:`block_floors`, read from
+    the order bins beside the band), is subtracted in power; a band at or below the floor
+    reads 0. Without floor bins on both sides (:func:`block_floors`) nothing is subtracted.
 
     Parameters
     ----------
@@ -286,6 +336,8 @@ def harmonic_amplitudes(
         Orders to read (cycles per revolution).
     band_bins : int
         Half-width of the band (bins).
+    floor : bool
+        Subtract the local floor (default); False reads the band's power as it is.
 
     Returns
     -------
@@ -295,14 +347,15 @@ def harmonic_amplitudes(
     m = check_int("band_bins", band_bins, 0)
     o = np.atleast_1d(np.asarray(orders, dtype=np.float64))
     k0 = np.rint(o * spectrum.revolutions).astype(np.int64)
-    out = np.full(o.shape, np.nan)
-    a2 = spectrum.amplitude**2
-    for i, k in enumerate(k0):
-        if k - m < 0 or k + m >= a2.size or o[i] + m / spectrum.revolutions > \
-                spectrum.max_valid_order:
-            continue
-        out[i] = np.sqrt(a2[k - m:k + m + 1].sum() / spectrum.enbw_bins)
-    return out
+    amp = spectrum.amplitude[None, :]
+    mo = np.array([spectrum.max_valid_order])
+    ks = [float(k) / spectrum.revolutions for k in k0]  # the bins read, as orders
+    readout = block_harmonics(amp, spectrum.revolutions, ks, m, spectrum.enbw_bins, mo)[0]
+    if not floor:
+        return readout
+    fl = block_floors(amp, spectrum.revolutions, ks, m, spectrum.enbw_bins, mo,
+                      n_averaged=spectrum.n_blocks)[0]
+    return subtract_floor(readout, fl)
 
 
 # --- blocks and windows on the angle grid -----------------------------------------------------
@@ -339,7 +392,10 @@ def blocks_to_displacement(amp: np.ndarray, orders: np.ndarray, rpm: np.ndarray,
 
 def block_harmonics(amp: np.ndarray, revs: int, orders: Sequence[float], band: int,
                     enbw: float, max_order: np.ndarray) -> np.ndarray:
-    """Band readouts ``(b, h)`` of ``orders`` from block amplitude spectra ``(b, k)``."""
+    """Band readouts ``(b, h)`` of ``orders`` from block amplitude spectra ``(b, k)``.
+
+    The band's power as it is, the floor under it included (see :func:`block_floors`).
+    """
     out = np.full((amp.shape[0], len(orders)), np.nan)
     a2 = amp**2
     for i, o in enumerate(orders):
@@ -349,6 +405,61 @@ def block_harmonics(amp: np.ndarray, revs: int, orders: Sequence[float], band: i
         val = np.sqrt(a2[:, k - band:k + band + 1].sum(axis=1) / enbw)
         out[:, i] = np.where(o + band / revs <= max_order, val, np.nan)
     return out
+
+
+def block_floors(amp: np.ndarray, revs: int, orders: Sequence[float], band: int,
+                 enbw: float, max_order: np.ndarray | float, *, n_averaged: int = 1
+                 ) -> np.ndarray:
+    r"""The local floor in each harmonic's readout band, ``(b, h)``, as an amplitude.
+
+    For each spectrum (row of ``amp``, a power average of ``n_averaged`` blocks) and harmonic,
+    the log power of the bins of :func:`floor_bins` below the row's ``max_order`` is fitted
+    by a polynomial in the bin offset from the harmonic (a parabola from
+    ``QUADRATIC_FLOOR_BINS`` bins on, else a straight line: a resonance's skirt is curved),
+    read across the band's ``2 band + 1`` bins (an interpolation: the floor is read on both
+    sides of the harmonic), corrected for the mean of the log of a :math:`\chi^2_\nu/\nu`
+    power (:math:`\psi(\nu/2) - \ln(\nu/2)`, :math:`\nu = 2\,n_\text{averaged}`: Hann
+    blocks of whole revolutions, not overlapping) and divided by :math:`B_{en}`, as the
+    readout is. NaN where :func:`block_harmonics` is NaN, or fewer than ``MIN_FLOOR_BINS / 2``
+    floor bins lie on either side (at the top of the spectrum or of the valid band: no
+    extrapolation). Subtracted in power from the readout (:func:`subtract_floor`).
+    """
+    out = np.full((amp.shape[0], len(orders)), np.nan)
+    a2 = np.asarray(amp, np.float64) ** 2
+    mo = np.broadcast_to(np.asarray(max_order, np.float64), (amp.shape[0],))
+    half_nu = float(max(int(n_averaged), 1))  # nu / 2
+    log_bias = float(digamma(half_nu) - np.log(half_nu))
+    tiny = np.finfo(np.float64).tiny
+    ks = [round(o * revs) for o in orders]
+    offsets = np.arange(-band, band + 1, dtype=np.float64)
+    for i, (o, k) in enumerate(zip(orders, ks, strict=True)):
+        if k - band < 0 or k + band >= amp.shape[1]:
+            continue
+        bins = floor_bins(k, band, revs, amp.shape[1], [j for j in ks if j != k])
+        for row in np.flatnonzero(o + band / revs <= mo):
+            use = bins[bins / revs <= mo[row]]
+            below = int(np.count_nonzero(use < k))
+            if min(below, use.size - below) < MIN_FLOOR_BINS // 2:
+                continue
+            deg = 2 if min(below, use.size - below) >= QUADRATIC_FLOOR_BINS // 2 else 1
+            coef = np.polyfit((use - k).astype(np.float64),
+                              np.log(np.maximum(a2[row, use], tiny)), deg)
+            power = np.exp(np.polyval(coef, offsets) - log_bias).sum() / enbw
+            out[row, i] = np.sqrt(power)
+    return out
+
+
+def subtract_floor(readout: np.ndarray, floor: np.ndarray) -> np.ndarray:
+    """Power subtraction, ``sqrt(max(readout^2 - floor^2, 0))``.
+
+    Where the floor is NaN (too few floor bins) the readout is kept as it is; a NaN readout
+    stays NaN.
+    """
+    readout = np.asarray(readout, np.float64)
+    floor = np.asarray(floor, np.float64)
+    power = readout**2 - np.where(np.isfinite(floor), floor**2, 0.0)
+    power[power < 0] = 0.0
+    return np.sqrt(power)
 
 
 def aligned_blocks(sig: AngleSignal, sel: np.ndarray, revs: int) -> list[Block]:

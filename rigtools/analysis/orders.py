@@ -27,7 +27,23 @@ Method
 
    ``B_en = N sum(w^2) / (sum w)^2`` the window's equivalent noise bandwidth in bins (1.5 for
    Hann): exact for a pure order (its Hann main lobe is three bins wide) and insensitive to a
-   little residual smearing.
+   little residual smearing. The broadband response under the band (noise, the skirt of a
+   resonance) adds its power to the harmonic's, the two being incoherent. The **local
+   floor** is read from the order bins beside the band (up to ``FLOOR_HALF_WIDTH_ORDERS`` = 2
+   orders each side; the bins within the band's half-width of an integer order, where shaft
+   harmonics and sidebands lie, and the other harmonics left out): a parabola fitted to their
+   log power, read across the band's bins (a resonance's skirt is curved) and corrected for
+   the mean of the log of a chi-square power, gives :math:`\hat F_k^2`, and
+
+   .. math::
+
+       A = \sqrt{\Big(\sum_{|k - k_0| \le m} \hat A_k^2
+           - \sum_{|k - k_0| \le m} \hat F_k^2\Big) \,/\, B_{en}},
+
+   floored at 0 (:func:`~rigtools.analysis.order_spectra.harmonic_amplitudes`,
+   :func:`~rigtools.analysis.order_spectra.block_floors`). Without it a harmonic under a
+   resonance's skirt reads high (6-18 % in issue 17). The floor itself is returned
+   (``floor``), for the harmonic's level above it (the low-SNR flag).
 4. **Mesh harmonics and Arms.** For ``z1`` teeth on the tracked shaft the mesh harmonics are
    orders ``h z1``, ``h = 1, 2, 3``, and
 
@@ -83,11 +99,13 @@ import numpy as np
 from models.geometry import check_teeth, mesh_frequency_Hz
 from rigtools.analysis.campbell import frequency_campbell, order_campbell
 from rigtools.analysis.order_spectra import (
+    FLOOR_HALF_WIDTH_ORDERS,
     Block,
     Campbell,
     OrderSpectrum,
     acceleration_to_displacement,
     aligned_blocks,
+    block_floors,
     block_harmonics,
     block_spectra,
     blocks_to_displacement,
@@ -96,6 +114,7 @@ from rigtools.analysis.order_spectra import (
     order_spectrum,
     order_window,
     order_windows,
+    subtract_floor,
 )
 from rigtools.analysis.resample import RESAMPLER_PASSBAND, AngleSignal, resample_to_angle
 from rigtools.analysis.signal_checks import (
@@ -150,9 +169,13 @@ class RunUpCurve:
     harmonics : tuple of int
         Mesh harmonics read (``(1, 2, 3)``).
     amplitude : numpy.ndarray
-        ``(w, len(harmonics))`` amplitudes (m/s^2 or m); NaN above the passband.
+        ``(w, len(harmonics))`` amplitudes (m/s^2 or m), the local floor subtracted in power
+        (module notes, 3); NaN above the passband.
     arms : numpy.ndarray
         ``sqrt(sum_h A_h^2)`` per window (seed 003's Arms).
+    floor : numpy.ndarray
+        ``(w, len(harmonics))``: the local floor in each harmonic's readout band, as an
+        amplitude (same unit); NaN where it could not be read.
     z1 : int
         Teeth on the tracked shaft.
     revs_per_window, hop_revs, samples_per_rev : int
@@ -171,6 +194,7 @@ class RunUpCurve:
     harmonics: tuple[int, ...]
     amplitude: np.ndarray
     arms: np.ndarray
+    floor: np.ndarray
     z1: int
     revs_per_window: int
     hop_revs: int
@@ -200,10 +224,14 @@ class StepLevels:
     harmonics : tuple of int
         Mesh harmonics read.
     amplitude : numpy.ndarray
-        ``(s, len(harmonics))`` amplitudes (m/s^2 or m); NaN where no block was usable or above
-        the passband.
+        ``(s, len(harmonics))`` amplitudes (m/s^2 or m), the local floor subtracted in power
+        (module notes, 3; band and floor power-averaged over the blocks first); NaN where no
+        block was usable or above the passband.
     arms : numpy.ndarray
         ``sqrt(sum_h A_h^2)`` per step.
+    floor : numpy.ndarray
+        ``(s, len(harmonics))``: the local floor in each harmonic's readout band, as an
+        amplitude (same unit, power-averaged over the blocks); NaN where it could not be read.
     n_blocks : numpy.ndarray
         Whole-revolution blocks averaged per step (int).
     n_pieces : numpy.ndarray
@@ -225,6 +253,7 @@ class StepLevels:
     harmonics: tuple[int, ...]
     amplitude: np.ndarray
     arms: np.ndarray
+    floor: np.ndarray
     n_blocks: np.ndarray
     n_pieces: np.ndarray
     n_gaps: np.ndarray
@@ -250,6 +279,7 @@ def run_up_curve(
     samples_per_rev: int | None = None,
     window: str = "hann",
     band_bins: int = 1,
+    floor: bool = True,
     quantity: Quantity = "acceleration",
     highpass_Hz: float = 10.0,
     highpass_order: int = 4,
@@ -287,6 +317,8 @@ def run_up_curve(
         Window name (default Hann).
     band_bins : int
         Half-width of the harmonic readout band (bins), see :func:`harmonic_amplitudes`.
+    floor : bool
+        Subtract the local floor under each harmonic, in power (default; module notes, 3).
     quantity : {"acceleration", "displacement"}
         Amplitudes as given, or converted to displacement (m).
     highpass_Hz, highpass_order
@@ -306,22 +338,27 @@ def run_up_curve(
     top = max(hs) * z + (m + 1) / revs
     p = check_samples_per_rev(samples_per_rev, top)
     q = check_quantity(quantity)
+    # the spectra reach past the top harmonic by the floor's bins (NaN beyond the passband)
     camp, acc, maxo = order_windows(
         x, sample_rate_Hz, speed, start_time_s=start_time_s, valid=valid,
         revs_per_window=revs, hop_revs=hop_revs, samples_per_rev=p, window=window,
         quantity=q, highpass_Hz=highpass_Hz, highpass_order=highpass_order,
-        max_order=top, min_speed_rpm=min_speed_rpm)
+        max_order=top + (FLOOR_HALF_WIDTH_ORDERS if floor else 0.0),
+        min_speed_rpm=min_speed_rpm)
     w = order_window(window, revs * p)
     enbw = float(revs * p * np.sum(w**2) / np.sum(w) ** 2)
     orders = [h * z for h in hs]
     amp = block_harmonics(acc, revs, orders, m, enbw, maxo)
+    fl = block_floors(acc, revs, orders, m, enbw, maxo)
     if q == "displacement":
-        amp = blocks_to_displacement(amp, np.asarray(orders, float), camp.speed_rpm,
-                                     highpass_Hz, highpass_order)
+        amp, fl = (blocks_to_displacement(v, np.asarray(orders, float), camp.speed_rpm,
+                                          highpass_Hz, highpass_order) for v in (amp, fl))
+    if floor:
+        amp = subtract_floor(amp, fl)
     return RunUpCurve(
         time_s=camp.time_s, speed_rpm=camp.speed_rpm,
         mesh_frequency_Hz=mesh_frequency_Hz(camp.speed_rpm, z), harmonics=hs, amplitude=amp,
-        arms=np.sqrt(np.sum(amp**2, axis=1)), z1=z, revs_per_window=revs,
+        arms=np.sqrt(np.sum(amp**2, axis=1)), floor=fl, z1=z, revs_per_window=revs,
         hop_revs=max(1, revs // 2) if hop_revs is None else int(hop_revs), samples_per_rev=p,
         quantity=q, spectra=camp, dropped=dict(camp.dropped))
 
@@ -344,6 +381,7 @@ def step_levels(
     samples_per_rev: int | None = None,
     window: str = "hann",
     band_bins: int = 1,
+    floor: bool = True,
     quantity: Quantity = "acceleration",
     highpass_Hz: float = 10.0,
     highpass_order: int = 4,
@@ -362,8 +400,9 @@ def step_levels(
     Parameters
     ----------
     x, sample_rate_Hz, speed, z1, start_time_s, valid, harmonics, samples_per_rev, window,
-    band_bins, quantity, highpass_Hz, highpass_order, min_speed_rpm
-        As for :func:`run_up_curve`.
+    band_bins, floor, quantity, highpass_Hz, highpass_order, min_speed_rpm
+        As for :func:`run_up_curve`; the band and the floor are power-averaged over the
+        step's blocks before the floor is subtracted.
     steps : sequence of SpeedStep, optional
         The steps; default detected from ``speed``.
     revs_per_block : int
@@ -398,6 +437,7 @@ def step_levels(
     enbw = float(revs * p * np.sum(w**2) / np.sum(w) ** 2)
     ns = len(steps)
     amp = np.full((ns, len(hs)), np.nan)
+    fl = np.full((ns, len(hs)), np.nan)
     rpm = np.full(ns, np.nan)
     n_blocks = np.zeros(ns, dtype=np.int64)
     n_pieces = np.zeros(ns, dtype=np.int64)
@@ -424,10 +464,16 @@ def step_levels(
         a, r_b, _, mo = block_spectra(sig, blocks, w, revs)
         orders = [h * z for h in hs]
         hb = block_harmonics(a, revs, orders, m, enbw, mo)
+        # the floor from the step's power-averaged spectrum (a steadier fit than per block)
+        fb = block_floors(np.sqrt(np.mean(a**2, axis=0))[None, :], revs, orders, m, enbw,
+                          float(mo.min()), n_averaged=len(blocks))
         if q == "displacement":
             # each harmonic converted at its own frequency in each block, then averaged
             hb = blocks_to_displacement(hb, np.asarray(orders, float), r_b, highpass_Hz,
                                         highpass_order)
+            fb = blocks_to_displacement(fb, np.asarray(orders, float),
+                                        np.array([len(blocks) / np.sum(1.0 / r_b)]),
+                                        highpass_Hz, highpass_order)
             a = blocks_to_displacement(a, np.arange(a.shape[1]) / revs, r_b, highpass_Hz,
                                        highpass_order)
         spec = OrderSpectrum(
@@ -439,9 +485,12 @@ def step_levels(
         n_blocks[i] = len(blocks)
         rpm[i] = spec.speed_rpm
         amp[i] = np.sqrt(np.mean(hb**2, axis=0))
+        fl[i] = fb[0]
+    if floor:
+        amp = subtract_floor(amp, fl)
     return StepLevels(
         steps=steps, speed_rpm=rpm, mesh_frequency_Hz=mesh_frequency_Hz(rpm, z), harmonics=hs,
-        amplitude=amp, arms=np.sqrt(np.sum(amp**2, axis=1)), n_blocks=n_blocks,
+        amplitude=amp, arms=np.sqrt(np.sum(amp**2, axis=1)), floor=fl, n_blocks=n_blocks,
         n_pieces=n_pieces, n_gaps=n_gaps, z1=z, revs_per_block=revs, samples_per_rev=p,
         quantity=q, spectra=tuple(spectra), dropped={k: v for k, v in dropped.items() if v})
 

@@ -13,8 +13,11 @@ For each peak of a Welch PSD (:class:`~rigtools.analysis.spectra.Spectrum`):
 2. **Frequency** finer than a bin: Gaussian interpolation (a parabola through the log PSD of
    the three bins around the maximum).
 3. **Location class**: a peak within tolerance of :math:`k f_\text{mesh}`,
-   :math:`k f_\text{mesh} \pm j f_\text{shaft}` or :math:`k f_\text{shaft}` is a mesh
-   harmonic, a mesh sideband or a shaft harmonic (in that order of precedence).
+   :math:`k f_\text{mesh} \pm j f_\text{shaft}` (:math:`1 \le k \le` ``max_mesh_order``,
+   default :data:`MAX_MESH_ORDER` = 5: the mesh harmonics a rig's spectrum shows as lines) or
+   :math:`k f_\text{shaft}` is a mesh harmonic, a mesh sideband or a shaft harmonic (in that
+   order of precedence). Mesh harmonics above ``max_mesh_order`` are not mesh lines: a peak
+   there is classified like any other.
 4. **Damping**, two ways, each with a standard uncertainty:
 
    * half-power bandwidth, :math:`\zeta = (f_2 - f_1) / (2 f_\text{peak})` where the PSD has
@@ -34,17 +37,40 @@ For each peak of a Welch PSD (:class:`~rigtools.analysis.spectra.Spectrum`):
    spike on a short record cannot shrink it to a few bins; the covariance is further
    inflated when the band covers fewer than 3 half-power half-widths or few bins.
 
-5. **Kind**: ``"structural"`` for a peak not at those frequencies whose fitted damping is
-   wider than the spectral resolution can show beyond doubt (:math:`\zeta - 2\sigma_\zeta >
-   \zeta_\text{res} = B_\text{3dB} / (2 f)`, with :math:`B_\text{3dB}` the window's
-   half-power bandwidth: a pure tone appears that wide, and at least ``MIN_RESOLVED_BINS``
-   bins across :math:`2\zeta f_n`), ``"tonal"`` for a narrow peak at none of them (fitted
-   damping at or below that, or, when too few bins are free to fit, half-power damping
-   below it), ``"unresolved"`` when the fit fails or its damping cannot be told apart from
-   the resolution limit. Estimates from a PSD with fewer than ``LOW_DOF`` equivalent dof
-   are flagged ``ModalEstimate.low_dof``. A broad peak within tolerance of a sideband or shaft
-   line (lines as narrow as a tone) is ``"structural"``; one on a mesh harmonic stays
-   ``"mesh_harmonic"`` with ``possible_resonance`` set.
+5. **Kind**, from the peak's width against the window's main lobe:
+
+   * ``"structural"``: a *broad* peak, wherever it sits (:attr:`ModalEstimate.broad`): the fit
+     succeeded, its damping exceeds the resolution equivalent beyond doubt
+     (:math:`\zeta - 2\sigma_\zeta > \zeta_\text{res} = B_\text{3dB} / (2 f)`, with
+     :math:`B_\text{3dB}` the window's half-power bandwidth: a pure tone appears that wide),
+     its half-power band :math:`2 \zeta f_n` spans at least ``MIN_RESOLVED_MAINLOBES`` = 2
+     of the window's whole main lobes (8 bins for Hann) and ``MIN_RESOLVED_BINS`` bins, and the
+     peak lies near the fitted :math:`f_n`, where a mode's noisy maximum can (a tone on the
+     skirt of a mode, or a horn of a line swept by a varying speed, is not the mode its fit
+     describes).
+   * a *line*, no wider than the main lobe (half-power damping at most ``LINE_FIT_FACTOR`` times
+     a tone's, or a fitted damping at or below :math:`\zeta_\text{res}`): its location class
+     (``"mesh_harmonic"``, ``"mesh_sideband"``, ``"shaft_harmonic"``), else ``"tonal"``;
+   * ``"unresolved"`` otherwise (the fit fails, or its damping cannot be told apart from the
+     resolution limit), or the location class of a peak at a mesh or shaft line.
+
+   Estimates from a PSD with fewer than ``LOW_DOF`` equivalent dof are flagged
+   ``ModalEstimate.low_dof``.
+6. **A line on a mode**: every line is masked out of the fits of the modes beside it (its
+   main lobe, further while the PSD falls), and the structural peaks are refitted so. A line
+   that sits on a mode hides the mode's maximum, so both are reported: for each line the PSD
+   beside it (smoothed over ``SHOULDER_SMOOTHING_BINS``, the lines masked) is followed uphill
+   to its maximum, and when that has the prominence threshold, an SDOF is fitted there with
+   the line's main lobe masked; a broad mode found so is reported as its own
+   ``"structural"`` peak (unless another peak already reports it). A broad peak at which the
+   PSD stands above the mode fitted without it by more than the Welch estimate's one-sided
+   ``false_alarm`` quantile (Sidak-corrected for the bins across the mode's half-power band,
+   among which its maximum falls) and by at least ``LINE_ON_MODE_MIN_DB`` is a line on a
+   mode: both are reported, the mode by the masked fit. A line within a structural peak's
+   half-power band names it in :attr:`Peak.on_mode`.
+7. **The quota** ``max_peaks`` keeps the peaks wider than the main lobe first, then the lines,
+   each by prominence: lines do not crowd out modes. Lines beyond the quota are not reported
+   but are masked and searched for a mode they hide (6).
 
 :func:`~rigtools.analysis.recording.analyse_recording` runs spectra, RMS, quality checks and
 peaks over the channels of a :class:`~rigtools.ingest.recording.Recording` and returns one
@@ -64,8 +90,8 @@ References
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -87,12 +113,15 @@ from rigtools.analysis.sdof_fit import (
     zeta_resolution,
 )
 from rigtools.analysis.signal_checks import Response, check_band, check_response
+from rigtools.analysis.spectra import log_chi2_stats
 from rigtools.analysis.spectrum_results import Spectrum
 from rigtools.errors import SignalError
 
 __all__ = [
     "FALSE_ALARM",
+    "LINE_KINDS",
     "LOW_DOF",
+    "MAX_MESH_ORDER",
     "HalfPower",
     "LocationClass",
     "ModalEstimate",
@@ -115,10 +144,28 @@ FALSE_ALARM = 0.01
 #: A structural peak's fitted damping must exceed the resolution equivalent by this many of
 #: its standard uncertainties.
 ZETA_MARGIN_SIGMA = 2.0
-#: ... and its half-power band (2 zeta f_n) must span at least this many bins.
+#: ... and its half-power band (2 zeta f_n) must span at least this many bins,
 MIN_RESOLVED_BINS = 4.0
+#: ... and this many of the window's whole main lobes (a line a little smeared, or a line with
+#: its sidebands, is about one main lobe wide).
+MIN_RESOLVED_MAINLOBES = 2.0
 #: Below this many equivalent degrees of freedom a modal estimate is flagged ``low_dof``.
 LOW_DOF = 35.0
+#: A mode's PSD maximum lies where its top stands within this many standard deviations of
+#: the log estimate of the top (:attr:`ModalEstimate.centre_tolerance_Hz`).
+CENTRE_SIGMA = 3.0
+#: Highest mesh harmonic order taken as a mesh line (the harmonics a rig's spectrum shows as
+#: lines); a peak at a higher harmonic is classified like any other peak.
+MAX_MESH_ORDER = 5
+#: Kinds of a peak no wider than the window's main lobe.
+LINE_KINDS = ("mesh_harmonic", "mesh_sideband", "shaft_harmonic", "tonal")
+#: Width (bins) of the moving average the PSD beside a line is followed on, uphill to a mode.
+SHOULDER_SMOOTHING_BINS = 7
+#: A line is told apart on a mode whose half-power band spans this many times the line's
+#: masked main lobe (and one bin more each side), or more.
+LINE_ON_MODE_WIDTHS = 2.0
+#: ... and when its bin stands at least this far above the mode fitted without it (dB).
+LINE_ON_MODE_MIN_DB = 3.0
 
 
 # --------------------------------------------------------------------------------------------
@@ -151,6 +198,8 @@ class ModalEstimate:
         Equivalent degrees of freedom of the PSD (``low_dof`` below ``LOW_DOF``).
     resolution_Hz : float
         Bin spacing of the PSD (Hz).
+    mainlobe_half_width_Hz : float
+        Half-width of the window's main lobe (Hz; 2 bins for Hann): how wide a line is.
     """
 
     f_n_Hz: float
@@ -171,21 +220,73 @@ class ModalEstimate:
     dof: float = float("nan")
     #: Bin spacing of the PSD (Hz).
     resolution_Hz: float = float("nan")
+    #: Half-width of the window's main lobe (Hz).
+    mainlobe_half_width_Hz: float = float("nan")
 
     @property
     def broad(self) -> bool:
-        r"""Fit succeeded and its damping exceeds the resolution equivalent beyond doubt.
+        r"""A mode's peak: wider than a line beyond doubt, and centred where the peak is.
 
-        :math:`\zeta - 2\sigma_\zeta > \zeta_\text{res}` (``ZETA_MARGIN_SIGMA``) and the
-        half-power band :math:`2\zeta f_n` spans at least ``MIN_RESOLVED_BINS`` bins: a
-        noise spike fitted with a damping just above the resolution limit is not broad.
+        All of:
+
+        * the fit succeeded and its damping exceeds the resolution equivalent (the half-power
+          width of the window's main lobe) beyond doubt,
+          :math:`\zeta - 2\sigma_\zeta > \zeta_\text{res}` (``ZETA_MARGIN_SIGMA``);
+        * the half-power band :math:`2\zeta f_n` spans at least ``MIN_RESOLVED_MAINLOBES``
+          whole main lobes (:math:`2 \times` ``mainlobe_half_width_Hz`` each; 8 bins for
+          Hann) and ``MIN_RESOLVED_BINS`` bins: a peak hardly wider than a line may be a line
+          a little smeared by the speed, or a line with its sidebands;
+        * the peak lies where a mode's noisy maximum can, near :math:`f_n`
+          (:attr:`centre_tolerance_Hz`: within half to one half-power half-width, by the
+          scatter of the estimate): a line on the skirt of a mode, or a horn of a line swept
+          by a varying speed, is not the mode its fit describes.
+
+        A noise spike fitted with a damping just above the resolution limit is not broad. A
+        line *on* a mode's maximum is told apart by :func:`analyse_peaks` (module docstring,
+        6).
         """
         f = self.fit
-        if not (f.success and not f.at_lower_bound and np.isfinite(self.zeta)
-                and np.isfinite(self.zeta_std)):
+        z, sz = self.zeta, self.zeta_std
+        if not (f.success and not f.at_lower_bound and np.isfinite(z) and np.isfinite(sz)):
             return False
-        return bool(self.zeta - ZETA_MARGIN_SIGMA * self.zeta_std > self.zeta_resolution
-                    and self.resolved_bins >= MIN_RESOLVED_BINS)
+        if not (z - ZETA_MARGIN_SIGMA * sz > self.zeta_resolution
+                and self.resolved_bins >= MIN_RESOLVED_BINS):
+            return False
+        if np.isfinite(self.mainlobe_half_width_Hz) and not (
+                z * self.f_n_Hz >= MIN_RESOLVED_MAINLOBES * self.mainlobe_half_width_Hz):
+            return False
+        return bool(abs(self.f_peak_Hz - self.f_n_Hz) <= self.centre_tolerance_Hz)
+
+    @property
+    def centre_tolerance_Hz(self) -> float:  # noqa: N802 (unit in the name)
+        r"""How far from :math:`f_n` the maximum of a mode's PSD may lie (Hz).
+
+        The maximum of a noisy flat top falls anywhere the top stands within
+        ``CENTRE_SIGMA`` standard deviations of the log estimate,
+        :math:`s = \sqrt{\psi'(\nu/2)}`, of its top: :math:`|f - f_n| \le x\,\zeta f_n`,
+        :math:`1/(1 + x^2) = e^{-3s}`, x kept within 0.5 to 1 half-power half-widths; plus
+        two standard uncertainties of the interpolated maximum.
+        """
+        if not (np.isfinite(self.zeta) and np.isfinite(self.dof)):
+            return float("nan")
+        s = float(np.sqrt(log_chi2_stats(max(self.dof, 1.0))[1]))
+        x = float(np.clip(np.sqrt(np.expm1(CENTRE_SIGMA * s)), 0.5, 1.0))
+        return x * self.zeta * self.f_n_Hz + 2 * max(self.f_peak_std_Hz, 0.0)
+
+    @property
+    def narrow(self) -> bool:
+        r"""No wider than a line: the peak's width is the window's main lobe.
+
+        The half-power damping measured on the PSD is at most ``LINE_FIT_FACTOR`` times the
+        resolution equivalent :math:`\zeta_\text{res}`, or the fitted damping is at its lower
+        bound or at most :math:`\zeta_\text{res}`. Never together with :attr:`broad`.
+        """
+        if self.broad:
+            return False
+        zhp, z = self.zeta_half_power, self.fit.zeta
+        if np.isfinite(zhp) and zhp <= LINE_FIT_FACTOR * self.zeta_resolution:
+            return True
+        return bool(np.isfinite(z) and (self.fit.at_lower_bound or z <= self.zeta_resolution))
 
     @property
     def resolved_bins(self) -> float:
@@ -227,7 +328,7 @@ class LocationClass:
 
 @dataclass(frozen=True)
 class Peak:
-    """One PSD peak, its location class and (unless it is a mesh or shaft line) its mode.
+    r"""One PSD peak, its location class and (unless it is a mesh or shaft line) its mode.
 
     Attributes
     ----------
@@ -238,14 +339,24 @@ class Peak:
     psd_per_Hz : float
         Interpolated PSD at the peak (unit^2/Hz).
     prominence_dB : float
-        Prominence on the log PSD (dB).
+        Prominence on the log PSD (dB); of a structural peak, the larger of that and its
+        prominence on the PSD smoothed with the lines masked (a line taller than the mode's
+        top on its skirt cuts the raw prominence).
     kind : str
         ``"structural"``, ``"mesh_harmonic"``, ``"mesh_sideband"``, ``"shaft_harmonic"``,
         ``"tonal"`` or ``"unresolved"``.
     location : LocationClass
+        Where the peak sits relative to the mesh and shaft lines (for a structural peak, the
+        line its frequency falls within tolerance of, if any: that alone says nothing).
     mode : ModalEstimate or None
-        Damping estimates (also for mesh and shaft lines, to tell a resonance that coincides
-        with one: ``mode.broad``).
+        Damping estimates of the peak as measured (for a line, those of the line; None for a
+        line on a mode, whose mode is its own structural peak). A structural peak found beside
+        a line (its maximum hidden by the line) has ``f_Hz = f_n``, ``index`` the bin nearest
+        it, and the prominence of its maximum on the PSD smoothed with the line masked.
+    on_mode : int or None
+        For a line (or an unresolved peak): the index, in :attr:`PeakAnalysis.structural`, of
+        the structural peak whose half-power band :math:`f_n \pm \zeta f_n` holds it (masked
+        out of that peak's fit); else None.
     """
 
     index: int
@@ -256,12 +367,12 @@ class Peak:
     kind: str
     location: LocationClass
     mode: ModalEstimate | None
+    on_mode: int | None = None
 
     @property
     def possible_resonance(self) -> bool:
-        """A mesh or shaft line that is broad: a resonance may coincide with it."""
-        return bool(self.location.kind is not None and self.mode is not None
-                    and self.mode.broad)
+        """A line that sits on a structural mode (reported as its own structural peak)."""
+        return bool(self.kind != "structural" and self.on_mode is not None)
 
 
 @dataclass(frozen=True)
@@ -288,6 +399,8 @@ class PeakAnalysis:
         exceeds the spread between the upper and lower such quantiles (a broad feature that
         lifts the running median).
     false_alarm : float
+    max_mesh_order : int
+        Highest mesh harmonic taken as a mesh line (:data:`MAX_MESH_ORDER` by default).
     """
 
     peaks: tuple[Peak, ...]
@@ -298,6 +411,7 @@ class PeakAnalysis:
     threshold_dB: float
     detection_threshold_dB: float = 0.0
     false_alarm: float = FALSE_ALARM
+    max_mesh_order: int = MAX_MESH_ORDER
 
     @property
     def structural(self) -> tuple[Peak, ...]:
@@ -313,6 +427,13 @@ class PeakAnalysis:
         """Peaks of one kind."""
         return tuple(p for p in self.peaks if p.kind == kind)
 
+    def lines_on(self, index: int) -> tuple[Peak, ...]:
+        """Lines within the half-power band of structural peak ``index``, masked out of its fit.
+
+        ``index`` is the peak's place in :attr:`structural`.
+        """
+        return tuple(p for p in self.peaks if p.on_mode == index)
+
 
 # --------------------------------------------------------------------------------------------
 # location classes
@@ -321,7 +442,8 @@ class PeakAnalysis:
 def classify_frequency(f_Hz: float, *, mesh_frequency_Hz: float | None,
                        shaft_frequencies_Hz: Sequence[float] = (), tolerance_Hz: float = 0.0,
                        rtol: float = 0.002, max_sideband: int = 3,
-                       max_shaft_harmonic: int = 10) -> LocationClass:
+                       max_shaft_harmonic: int = 10,
+                       max_harmonic: int = MAX_MESH_ORDER) -> LocationClass:
     r"""Match a frequency to mesh harmonics, their sidebands and shaft harmonics.
 
     Parameters
@@ -338,13 +460,16 @@ def classify_frequency(f_Hz: float, *, mesh_frequency_Hz: float | None,
         Largest sideband order j.
     max_shaft_harmonic : int
         Largest shaft harmonic order.
+    max_harmonic : int
+        Largest mesh harmonic order k taken as a mesh line (and whose sidebands are);
+        default :data:`MAX_MESH_ORDER`.
 
     Returns
     -------
     LocationClass
-        The first match in the order mesh harmonic (any k >= 1), mesh sideband
-        (:math:`k f_m \pm j f_s`, k >= 1, 1 <= j <= max_sideband), shaft harmonic
-        (:math:`k f_s`, 1 <= k <= max_shaft_harmonic); the nearest within a class.
+        The first match in the order mesh harmonic (1 <= k <= max_harmonic), mesh sideband
+        (:math:`k f_m \pm j f_s`, 1 <= k <= max_harmonic, 1 <= j <= max_sideband), shaft
+        harmonic (:math:`k f_s`, 1 <= k <= max_shaft_harmonic); the nearest within a class.
 
     Examples
     --------
@@ -358,14 +483,14 @@ def classify_frequency(f_Hz: float, *, mesh_frequency_Hz: float | None,
     if mesh_frequency_Hz is not None and mesh_frequency_Hz > 0:
         fm = float(mesh_frequency_Hz)
         k = round(f / fm)
-        if k >= 1 and abs(f - k * fm) <= tol:
+        if 1 <= k <= max_harmonic and abs(f - k * fm) <= tol:
             return LocationClass("mesh_harmonic", k, None, None, k * fm)
         best: tuple[float, LocationClass] | None = None
         for fs_ in shafts:
             for j in range(1, max_sideband + 1):
                 for sign in (-1, 1):
                     kk = round((f - sign * j * fs_) / fm)
-                    if kk < 1:
+                    if not 1 <= kk <= max_harmonic:
                         continue
                     expected = kk * fm + sign * j * fs_
                     d = abs(f - expected)
@@ -397,7 +522,185 @@ def _estimate(ctx: PSDContext, k0: int, lo: int, hi: int, mask: np.ndarray, p: i
         f_n_Hz=fit.f_n_Hz, f_n_std_Hz=fit.f_n_std_Hz, zeta=fit.zeta, zeta_std=fit.zeta_std,
         zeta_half_power=hp.zeta, zeta_half_power_std=hp.zeta_std, f_peak_Hz=f_pk,
         f_peak_std_Hz=f_std, psd_peak_per_Hz=float(np.exp(ln_pk)), zeta_resolution=zres,
-        fit=fit, half_power=hp, response=response, dof=ctx.dof, resolution_Hz=ctx.df)
+        fit=fit, half_power=hp, response=response, dof=ctx.dof, resolution_Hz=ctx.df,
+        mainlobe_half_width_Hz=ctx.props.mainlobe_half_width_bins * ctx.df)
+
+
+def _main_lobe(ctx: PSDContext, k: int, mask: np.ndarray) -> None:
+    """Mask the main lobe of a line at bin k and one bin more each side (not further)."""
+    base = int(np.ceil(ctx.props.mainlobe_half_width_bins)) + 1
+    mask[max(k - base, 0): min(k + base, mask.size - 1) + 1] = True
+
+
+def _band(ctx: PSDContext, k: int, others: Sequence[int], mask: np.ndarray
+          ) -> tuple[int, int]:
+    """Bins ``[lo, hi]`` a peak at k is fitted in: up to the PSD minimum before the next peak."""
+    lnP = ctx.lnP
+    lo, hi = 1, ctx.f.size - 2
+    left = [j for j in others if j < k]
+    right = [j for j in others if j > k]
+    if left:
+        j = max(left)
+        lo = j + int(np.argmin(np.where(mask[j: k + 1], np.inf, lnP[j: k + 1])))
+    if right:
+        j = min(right)
+        hi = k + int(np.argmin(np.where(mask[k: j + 1], np.inf, lnP[k: j + 1])))
+    return lo, hi
+
+
+def _kind(mode: ModalEstimate, loc: LocationClass) -> str:
+    """Kind of a peak from its width (:attr:`ModalEstimate.broad`, ``.narrow``) and location."""
+    if mode.broad:
+        return "structural"
+    if loc.kind is not None:
+        return loc.kind
+    return "tonal" if mode.narrow else "unresolved"
+
+
+def _smoothed_log(psd: np.ndarray, mask: np.ndarray, m: int) -> np.ndarray:
+    """Natural log of the m-bin moving average of the PSD over unmasked bins (NaN where masked)."""
+    w = (~mask).astype(np.float64)
+    box = np.ones(m)
+    num = np.convolve(psd * w, box, mode="same")
+    den = np.convolve(w, box, mode="same")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = np.log(num / den)
+    out[mask | (den < 0.5 * m)] = np.nan
+    return out
+
+
+def _uphill(L: np.ndarray, k: int, step: int, limit: int) -> int | None:
+    """From bin k outward (``step`` -1 or 1), the first local maximum of ``L`` (NaN skipped)."""
+    i = k + step
+    while (i >= limit) if step < 0 else (i <= limit):
+        if np.isfinite(L[i]):
+            break
+        i += step
+    else:
+        return None
+    best = i
+    j = i + step
+    while (j >= limit) if step < 0 else (j <= limit):
+        if np.isfinite(L[j]):
+            if L[j] < L[best]:
+                break
+            best = j
+        j += step
+    return best
+
+
+def _sdof_expected_log(ctx: PSDContext, fit: SDOFFit, k: int, p: int) -> float:
+    """Natural log of the expected Welch PSD of a fitted SDOF at bin k (:class:`SDOFFit`)."""
+    fe = np.abs(ctx.f[k] - ctx.props.kernel_offsets_bins * ctx.df)
+    r2 = (fe / fit.f_n_Hz) ** 2
+    z2 = fit.zeta**2
+    s = 4 * z2 * (r2**p if p else 1.0) / ((1 - r2) ** 2 + 4 * z2 * r2)
+    return float(np.log(fit.peak_psd_per_Hz * float(s @ ctx.props.kernel)
+                        + fit.background_per_Hz))
+
+
+class _Peaks:
+    """The detected peaks of one PSD while they are classified (see :func:`analyse_peaks`)."""
+
+    def __init__(self, ctx: PSDContext, p: int, fit_span: float, response: str,
+                 threshold_dB: float, false_alarm: float) -> None:
+        self.ctx, self.p, self.fit_span, self.response = ctx, p, fit_span, response
+        self.threshold = float(threshold_dB) / (10 * np.log10(np.e))  # natural log
+        self.false_alarm = float(false_alarm)
+
+    def estimate(self, k: int, lo: int, hi: int, mask: np.ndarray, line: bool = False
+                 ) -> ModalEstimate:
+        return _estimate(self.ctx, k, lo, hi, mask, self.p, self.fit_span, self.response,
+                         line=line)
+
+    def mode_beside(self, k: int, lo: int, hi: int, mask: np.ndarray, tried: dict[int, bool],
+                    known: Sequence[Peak] = ()) -> tuple[ModalEstimate, float] | None:
+        """A broad, prominent mode whose maximum the line at bin k hides, fitted without it.
+
+        ``mask`` holds the other lines; the line's own main lobe is masked here. The PSD beside
+        the line, smoothed over ``SHOULDER_SMOOTHING_BINS``, is followed uphill on both sides;
+        the higher maximum must have the prominence threshold on that smoothed PSD (masked bins
+        bridged linearly). Returns the mode and that prominence (dB). A maximum already in
+        ``tried`` (filled here) or within the half-power band of a ``known`` structural peak
+        is not fitted again.
+        """
+        own = mask.copy()
+        _main_lobe(self.ctx, k, own)
+        L = _smoothed_log(self.ctx.psd, own, SHOULDER_SMOOTHING_BINS)
+        tops = [t for t in (_uphill(L, k, -1, lo), _uphill(L, k, 1, hi)) if t is not None]
+        if not tops:
+            return None
+        k0 = max(tops, key=lambda t: L[t])
+        ok = np.isfinite(L)
+        filled = np.interp(np.arange(L.size), np.flatnonzero(ok), L[ok])
+        if not (filled[k0] > filled[k0 - 1] and filled[k0] >= filled[k0 + 1]):
+            return None  # rising on: the maximum lies beyond the band searched
+        if k0 in tried or any(q.mode is not None and abs(self.ctx.f[k0] - q.mode.f_n_Hz)
+                              <= q.mode.zeta * q.mode.f_n_Hz for q in known):
+            return None
+        tried[k0] = True
+        height = float(sps.peak_prominences(filled, [k0])[0][0])
+        if not height >= self.threshold:
+            return None
+        mode = self.estimate(k0, lo, hi, own)
+        return (mode, 10 * np.log10(np.e) * height) if mode.broad else None
+
+    def prominence_without_lines(self, k: int, mask: np.ndarray) -> float:
+        """Prominence (dB) of the peak at bin k on the PSD smoothed with the lines masked.
+
+        The PSD is averaged over ``SHOULDER_SMOOTHING_BINS`` unmasked bins, masked bins are
+        bridged linearly, and the maximum nearest k is taken: a line taller than a mode's
+        top on its skirt cuts the mode's prominence on the raw PSD, not here.
+        """
+        L = _smoothed_log(self.ctx.psd, mask, SHOULDER_SMOOTHING_BINS)
+        ok = np.isfinite(L)
+        if np.count_nonzero(ok) < 3:
+            return float("nan")
+        filled = np.interp(np.arange(L.size), np.flatnonzero(ok), L[ok])
+        k0 = int(k)
+        for step in (-1, 1):  # uphill from k, either way
+            while 0 < k0 + step < filled.size - 1 and filled[k0 + step] > filled[k0]:
+                k0 += step
+        if not (0 < k0 < filled.size - 1):
+            return float("nan")
+        return float(10 * np.log10(np.e) * sps.peak_prominences(filled, [k0])[0][0])
+
+    def line_on(self, k: int, mode: ModalEstimate, mask: np.ndarray) -> bool:
+        r"""The PSD at bin k stands above the mode fitted without it beyond the Welch scatter.
+
+        The excess of :math:`\ln \hat S_k` over the fitted model is taken relative to the
+        median excess of the unmasked bins across the mode's half-power band (so that a model
+        a little low or high at the top, fitted on the flanks, does not count), and compared
+        with the one-sided chi-square quantile of ``false_alarm``, Sidak-corrected for the
+        :math:`N = 2\zeta f_n/\Delta f` bins of that band among which the maximum falls,
+        :math:`\alpha_1 = 1 - (1-\alpha)^{1/N}`, scaled up by the ratio of the residuals'
+        robust spread (1.4826 MAD) to the estimator's :math:`\sqrt{\psi'(\nu/2)}` when the
+        model fits worse than the scatter; and it must be at least ``LINE_ON_MODE_MIN_DB``
+        (a line that does not double the PSD at its bin hardly moves the mode's fit). A mode
+        whose half-power band is narrower than ``LINE_ON_MODE_WIDTHS`` times the masked main
+        lobe is not tested: a line on it cannot be told apart.
+        """
+        ctx = self.ctx
+        n_top = mode.resolved_bins
+        width = 2 * (int(np.ceil(ctx.props.mainlobe_half_width_bins)) + 1) + 1  # as masked
+        if n_top < LINE_ON_MODE_WIDTHS * width:
+            return False  # the mode is hardly wider than the line: not told apart
+        nu = max(ctx.dof, 1.0)
+        alpha1 = -np.expm1(np.log1p(-self.false_alarm) / n_top)
+        threshold = float(np.log(chi2.isf(alpha1, nu) / nu) - ctx.bias)
+        half = mode.zeta * mode.f_n_Hz
+        top = np.flatnonzero((np.abs(ctx.f - mode.f_n_Hz) <= half) & ~mask)
+        if top.size < 3:
+            return False
+        resid = np.array([ctx.lnP[j] - _sdof_expected_log(ctx, mode.fit, int(j), self.p)
+                          for j in top])
+        centre = float(np.median(resid))
+        spread = 1.4826 * float(np.median(np.abs(resid - centre)))
+        # the model's misfit widens the residuals beyond the estimator's own scatter
+        threshold *= max(1.0, spread / np.sqrt(ctx.eps2))
+        threshold = max(threshold, LINE_ON_MODE_MIN_DB / (10 * np.log10(np.e)))
+        excess = ctx.lnP[k] - _sdof_expected_log(ctx, mode.fit, k, self.p) - centre
+        return bool(excess > threshold)
 
 
 def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
@@ -406,6 +709,7 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
                   f_range_Hz: Sequence[float] | None = None,
                   max_peaks: int = 20, tolerance_Hz: float | None = None, rtol: float = 0.002,
                   max_sideband: int = 3, max_shaft_harmonic: int = 10,
+                  max_mesh_order: int = MAX_MESH_ORDER,
                   response: Response = "displacement", fit_span: float = 5.0) -> PeakAnalysis:
     r"""Find, locate, classify and damp the peaks of one channel's PSD.
 
@@ -426,12 +730,15 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
         A peak must also stand above the local background (running median) by the
         chi-square quantile of the Welch estimate (:math:`\nu` dof) that pure noise exceeds
         with this probability anywhere in the searched band (Sidak over its bins), or have a
-        prominence above the spread between the upper and lower such quantiles.
+        prominence above the spread between the upper and lower such quantiles. Also the
+        probability that a mode's maximum is taken for a line on it (module docstring, 6).
     f_range_Hz : (float, float), optional
         Band searched (Hz); default from just above the window's main lobe at 0 Hz to
         the Nyquist frequency.
     max_peaks : int
-        Most prominent peaks kept.
+        Peaks kept: those wider than the window's main lobe (at half their prominence) first,
+        then the lines, each by prominence. Lines beyond it are not reported, but are masked
+        out of the fits and searched for a mode they hide.
     tolerance_Hz : float, optional
         Absolute matching tolerance (Hz); default the window's half-power bandwidth
         (1.44 bins for Hann). The tolerance at f is ``tolerance_Hz + rtol * f``.
@@ -439,6 +746,11 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
         Relative matching tolerance (speed variation during the record).
     max_sideband, max_shaft_harmonic : int
         See :func:`classify_frequency`.
+    max_mesh_order : int
+        Highest mesh harmonic taken as a mesh line (with its sidebands), default
+        :data:`MAX_MESH_ORDER` = 5: the harmonics a rig's spectrum shows as lines. A peak at
+        a higher harmonic is classified like any other (a narrow one ``"tonal"``, a broad
+        one ``"structural"``). 0: no mesh lines.
     response : {'displacement', 'velocity', 'acceleration'}
         See :func:`fit_sdof`.
     fit_span : float
@@ -450,8 +762,12 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
 
     Notes
     -----
-    A mesh or shaft line near a peak is masked out of that peak's half-power search and fit;
-    another unexplained peak limits the fitted band at the PSD minimum between the two.
+    Each peak is first fitted with the mesh and shaft lines near it masked out of its
+    half-power search and fit, and another unexplained peak limiting the fitted band at the
+    PSD minimum between the two; its kind follows (module docstring, 5). Then every line is
+    masked out of the fits of the structural peaks, which are refitted between their
+    neighbouring structural or unresolved peaks, and the modes that lines sit on are found
+    (module docstring, 6).
     """
     p = check_response(response)
     ctx = PSDContext(spectrum)
@@ -467,6 +783,10 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
         raise SignalError("prominence_dB", "finite and >= 0", repr(prominence_dB))
     if not 0 < false_alarm < 1:
         raise SignalError("false_alarm", "in (0, 1)", repr(false_alarm))
+    if isinstance(max_mesh_order, bool) or not isinstance(max_mesh_order, int | np.integer) \
+            or max_mesh_order < 0:
+        raise SignalError("max_mesh_order", "an integer >= 0", repr(max_mesh_order))
+    max_order = int(max_mesh_order)
     sigma_dB = 10 * np.log10(np.e) * np.sqrt(ctx.eps2)
     threshold = max(float(prominence_dB), float(min_sigma) * sigma_dB)
     LdB = 10 * np.log10(np.e) * lnP
@@ -480,70 +800,158 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
     # spread between the highest and lowest noise values in the band
     sig = (LdB[idx] - bg_dB[idx] >= detect_dB) | (prom >= spread_dB)
     idx, prom = idx[sig], prom[sig]
-    order = np.argsort(-prom)[: int(max_peaks)]
-    keep = np.sort(order)
+    # the quota keeps peaks wider than a line first (modes are not crowded out by lines),
+    # each group by prominence; the lines beyond it are still searched for hidden modes
+    mainlobe = 2 * ctx.props.mainlobe_half_width_bins
+    wide = (sps.peak_widths(ctx.psd, idx, rel_height=0.5)[0] > mainlobe) if idx.size else (
+        np.zeros(0, bool))
+    order = np.lexsort((-prom, ~wide))
+    keep = np.sort(order[: int(max_peaks)])
+    beyond = np.sort(order[int(max_peaks):])
+    beyond = idx[beyond][~wide[beyond]]
     idx, prom = idx[keep], prom[keep]
     atol = (ctx.props.bandwidth_3dB_bins * df) if tolerance_Hz is None else float(tolerance_Hz)
     shafts = tuple(float(s) for s in shaft_frequencies_Hz)
+
+    def locate(fk: float) -> LocationClass:
+        return classify_frequency(fk, mesh_frequency_Hz=mesh_frequency_Hz,
+                                  shaft_frequencies_Hz=shafts, tolerance_Hz=atol, rtol=rtol,
+                                  max_sideband=max_sideband,
+                                  max_shaft_harmonic=max_shaft_harmonic,
+                                  max_harmonic=max_order)
+
     located = []
     for k in idx:
         fk, fstd, lnk = ctx.interpolate(int(k))
-        loc = classify_frequency(fk, mesh_frequency_Hz=mesh_frequency_Hz,
-                                 shaft_frequencies_Hz=shafts, tolerance_Hz=atol, rtol=rtol,
-                                 max_sideband=max_sideband,
-                                 max_shaft_harmonic=max_shaft_harmonic)
-        located.append((int(k), fk, fstd, lnk, loc))
+        located.append((int(k), fk, fstd, lnk, locate(fk)))
     line_mask = np.zeros(n, bool)
     for k, *_, loc in located:
         if loc.kind is not None:
             mask_line(ctx, k, line_mask)
     if mesh_frequency_Hz is not None and mesh_frequency_Hz > 0:
-        # mesh harmonics too weak to be detected as peaks still bend a nearby fit
-        for fk in np.arange(1, int(f[-1] // mesh_frequency_Hz) + 1) * mesh_frequency_Hz:
+        # mesh lines too weak to be detected as peaks still bend a nearby fit: their main
+        # lobe is masked (no further: on a mode's maximum the PSD falls away from them)
+        top = min(max_order, int(f[-1] // mesh_frequency_Hz))
+        for fk in np.arange(1, top + 1) * mesh_frequency_Hz:
             k = round(fk / df)
             if 0 < k < n - 1 and not line_mask[k]:
-                mask_line(ctx, k + int(np.argmax(lnP[k - 1: k + 2])) - 1, line_mask)
+                _main_lobe(ctx, k + int(np.argmax(lnP[k - 1: k + 2])) - 1, line_mask)
+    work = _Peaks(ctx, p, fit_span, response, threshold, false_alarm)
+    prominence = {int(k): float(v) for k, v in zip(idx, prom, strict=True)}
+
+    # pass 1: each peak measured as found, its kind from its width
     free = [k for k, *_, loc in located if loc.kind is None]
-    peaks = []
+    first_pass = []
+    fitted: dict[int, tuple[int, int, np.ndarray]] = {}
     for k, fk, fstd, lnk, loc in located:
         own = np.zeros(n, bool)  # the peak itself is what is measured: never masked
         mask_line(ctx, k, own)
         mask = line_mask & ~own
-        lo, hi = 1, n - 2
         others = [j for j in free if j != k] if loc.kind is None else [
             j for j, *_ in located if j != k]
-        left = [j for j in others if j < k]
-        right = [j for j in others if j > k]
-        if left:
-            j = max(left)
-            lo = j + int(np.argmin(np.where(mask[j: k + 1], np.inf, lnP[j: k + 1])))
-        if right:
-            j = min(right)
-            hi = k + int(np.argmin(np.where(mask[k: j + 1], np.inf, lnP[k: j + 1])))
-        mode = _estimate(ctx, k, lo, hi, mask, p, fit_span, response,
-                         line=loc.kind is not None)
-        z, zhp = mode.fit.zeta, mode.zeta_half_power
-        if loc.kind in ("mesh_sideband", "shaft_harmonic") and mode.broad:
-            # Sidebands and shaft lines are as narrow as a tone; a broad peak that merely falls
-            # within their tolerance is a resonance (its `location` still names the line).
-            kind = "structural"
-        elif loc.kind is not None:
-            kind = loc.kind
-        elif mode.broad:
-            kind = "structural"
-        elif np.isfinite(z) and (mode.fit.at_lower_bound or z <= mode.zeta_resolution):
-            kind = "tonal"
-        elif not np.isfinite(z) and zhp <= mode.zeta_resolution:  # too hemmed in to fit
-            kind = "tonal"
-        else:  # fit failed, or damping not told apart from the resolution limit
-            kind = "unresolved"
+        lo, hi = _band(ctx, k, others, mask)
+        mode = work.estimate(k, lo, hi, mask, line=loc.kind is not None)
+        first_pass.append((k, fk, fstd, lnk, loc, mode, _kind(mode, loc)))
+        fitted[k] = (lo, hi, mask)
+
+    # pass 2: every line masked out of the modes beside it
+    lines = [r for r in first_pass if r[6] in LINE_KINDS]
+    line_masks = {}
+    for r in lines:
+        m_ = np.zeros(n, bool)
+        mask_line(ctx, r[0], m_)
+        line_masks[r[0]] = m_
+    for k in beyond:  # lines beyond the quota: not reported, still masked and searched
+        m_ = np.zeros(n, bool)
+        mask_line(ctx, int(k), m_)
+        line_masks[int(k)] = m_
+    all_lines = line_mask.copy()
+    for m_ in line_masks.values():
+        all_lines |= m_
+    limits = [r[0] for r in first_pass if r[6] not in LINE_KINDS]
+    peaks: list[Peak] = []
+    modes: list[Peak] = []  # structural, in the order found: direct ones first
+
+    def line_mask_of(k: int, mask: np.ndarray) -> np.ndarray:
+        out = mask.copy()
+        _main_lobe(ctx, k, out)
+        return out
+
+    for k, fk, fstd, lnk, loc, mode, kind in first_pass:
+        if kind != "structural":
+            continue
+        own = np.zeros(n, bool)
+        mask_line(ctx, k, own)
+        mask = all_lines & ~own
+        lo, hi = _band(ctx, k, [j for j in limits if j != k], mask)
+        lo1, hi1, mask1 = fitted[k]
+        if (lo, hi) != (lo1, hi1) or not np.array_equal(mask[lo:hi + 1], mask1[lo:hi + 1]):
+            refit = work.estimate(k, lo, hi, mask)
+            mode = refit if refit.broad else mode
+        # a line on the mode stands above even the fit that includes it: only then is the
+        # mode fitted without it, and the line tested against that fit
+        under = None
+        if work.line_on(k, mode, line_mask_of(k, mask)):
+            under = work.mode_beside(k, lo, hi, mask, {})
+        if under is not None and work.line_on(k, under[0], line_mask_of(k, mask)):
+            # a line on the mode: the line as measured, the mode fitted without it
+            peaks.append(Peak(index=k, f_Hz=fk, f_std_Hz=fstd, psd_per_Hz=float(np.exp(lnk)),
+                              prominence_dB=prominence[k], kind=loc.kind or "tonal",
+                              location=loc, mode=None))
+            modes.append(_mode_peak(ctx, *under, locate))
+            continue
+        prom_k = max(prominence[k], work.prominence_without_lines(k, mask))
+        modes.append(Peak(index=k, f_Hz=fk, f_std_Hz=fstd, psd_per_Hz=float(np.exp(lnk)),
+                          prominence_dB=prom_k, kind=kind, location=loc, mode=mode))
+    for k, fk, fstd, lnk, loc, mode, kind in first_pass:
+        if kind == "structural":
+            continue
         peaks.append(Peak(index=k, f_Hz=fk, f_std_Hz=fstd, psd_per_Hz=float(np.exp(lnk)),
-                          prominence_dB=float(prom[list(idx).index(k)]), kind=kind,
-                          location=loc, mode=mode))
-    return PeakAnalysis(peaks=tuple(peaks), mesh_frequency_Hz=mesh_frequency_Hz,
+                          prominence_dB=prominence[k], kind=kind, location=loc, mode=mode))
+    tried: dict[int, bool] = {}  # tops of the smoothed PSD already fitted
+    for k in sorted(line_masks):
+        mask = all_lines & ~line_masks[k]
+        lo, hi = _band(ctx, k, [j for j in limits if j != k], mask)
+        under = work.mode_beside(k, lo, hi, mask, tried, modes)
+        if under is not None and not _known(under[0], modes):
+            modes.append(_mode_peak(ctx, *under, locate))
+    modes.sort(key=lambda q: q.f_Hz)
+    # the lines within a mode's half-power band belong to it
+    for i, q in enumerate(peaks):
+        if q.kind == "unresolved" and q.mode is not None and q.mode.broad:
+            continue
+        held = [(abs(q.f_Hz - m.mode.f_n_Hz), j) for j, m in enumerate(modes)
+                if m.mode is not None
+                and abs(q.f_Hz - m.mode.f_n_Hz) <= m.mode.zeta * m.mode.f_n_Hz]
+        if held:
+            peaks[i] = replace(q, on_mode=min(held)[1])
+    out = sorted([*peaks, *modes], key=lambda q: q.f_Hz)
+    return PeakAnalysis(peaks=tuple(out), mesh_frequency_Hz=mesh_frequency_Hz,
                         shaft_frequencies_Hz=shafts, tolerance_Hz=atol, rtol=float(rtol),
                         threshold_dB=threshold, detection_threshold_dB=detect_dB,
-                        false_alarm=float(false_alarm))
+                        false_alarm=float(false_alarm), max_mesh_order=max_order)
+
+
+def _known(mode: ModalEstimate, modes: Sequence[Peak]) -> bool:
+    """Another structural peak already reports this mode (within either's half-power band)."""
+    for q in modes:
+        m = q.mode
+        if m is None:
+            continue
+        d = abs(m.f_n_Hz - mode.f_n_Hz)
+        if d <= max(m.zeta * m.f_n_Hz, mode.zeta * mode.f_n_Hz):
+            return True
+    return False
+
+
+def _mode_peak(ctx: PSDContext, mode: ModalEstimate, prominence_dB: float,
+               locate: Callable[[float], LocationClass]) -> Peak:
+    """A structural peak for a mode found beside a line: at its f_n (fitted)."""
+    k = int(np.clip(round(mode.f_n_Hz / ctx.df), 1, ctx.f.size - 2))
+    return Peak(index=k, f_Hz=mode.f_n_Hz, f_std_Hz=mode.f_n_std_Hz,
+                psd_per_Hz=mode.fit.peak_psd_per_Hz + mode.fit.background_per_Hz,
+                prominence_dB=prominence_dB, kind="structural",
+                location=locate(mode.f_n_Hz), mode=mode)
 
 
 def detection_threshold_db(dof: float, n_bins: int, false_alarm: float

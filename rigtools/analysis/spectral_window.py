@@ -6,6 +6,7 @@ window and length, and :func:`window_array`, which turns a window argument into 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -140,6 +141,92 @@ class WindowProperties:
                 break
         rho2 = np.asarray(out) / out[0]
         return rho2 if rho2.size >= 2 else np.r_[rho2, 0.0]
+
+    def welch_covariance(self, psd_of_bin: Callable[[np.ndarray], np.ndarray],
+                         bins: np.ndarray, noverlap: int, n_windows: int,
+                         n_segments: int = 1) -> np.ndarray:
+        r"""Relative covariance of Welch estimates at ``bins`` of a process with a given PSD.
+
+        The DFT of one window at bin j, :math:`X_j = \sum_n w_n x_n e^{-2\pi i j n/N}`, of a
+        stationary Gaussian process with PSD S has
+        :math:`\mathrm{Cov}(X_j, X_k^{(s)}) = \int S(\nu) W(\nu - j) W^*(\nu - k)
+        e^{-2\pi i \nu s/N} d\nu` for a window shifted by s samples (:math:`\nu` in bins,
+        :math:`W(\nu) = \sum_n w_n e^{-2\pi i \nu n/N}`), and by Isserlis' theorem
+        :math:`\mathrm{Cov}(|X_j|^2, |X_k^{(s)}|^2) = |\mathrm{Cov}(X_j, X_k^{(s)})|^2`.
+        Averaged over K windows S = nperseg - noverlap apart,
+
+        .. math:: \frac{\mathrm{Cov}(\hat S_j, \hat S_k)}{E\hat S_j\, E\hat S_k} =
+                  \frac{K |C_{jk}(0)|^2 + \sum_{m \ge 1} K_m (|C_{jk}(mS)|^2 + |C_{kj}(mS)|^2)}
+                  {K^2\, C_{jj}(0)\, C_{kk}(0)},
+
+        :math:`K_m = \max(K - m\,n_\text{seg}, 0)`. For a white spectrum the diagonal is
+        :math:`2/\nu` (Percival and Walden 1993, Eq. 292b) and the correlation
+        :meth:`averaged_bin_correlation`; where the spectrum changes within the window's main
+        lobe (a mode a few bins wide) neighbouring bins are correlated more, or less, than
+        that. The integral is a sum over a grid of 1/8 bin, over the spectral window's extent
+        (:attr:`kernel_offsets_bins`) beyond the outer bins; negative frequencies are left out
+        (bins away from 0 Hz).
+
+        Parameters
+        ----------
+        psd_of_bin : callable
+            The PSD (any scale, >= 0) at frequencies given in bins (``f / (fs / nperseg)``).
+        bins : numpy.ndarray of int
+            Bins whose estimates are wanted, increasing.
+        noverlap, n_windows, n_segments : int
+            As for :meth:`averaged_bin_correlation`.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape ``(len(bins), len(bins))``: covariance of the estimates over the product of
+            their expected values (about the covariance of their logs).
+        """
+        w = self._w
+        n = self.nperseg
+        ov = _KERNEL_OVERSAMPLING
+        bins = np.asarray(bins, np.int64)
+        ext = int(np.ceil(float(np.max(np.abs(self.kernel_offsets_bins)))))
+        lo = int(bins[0])
+        nf = int(bins[-1]) - lo + 1  # the contiguous run of bins holding ``bins``
+        grid = np.arange((lo - ext) * ov, (lo + nf - 1 + ext) * ov + 1)  # in 1/ov bins
+        S = np.maximum(np.asarray(psd_of_bin(grid / ov), np.float64), 0.0)
+        W = np.fft.fft(w, n * ov)
+        o = np.arange(-ext * ov, ext * ov + 1)  # offsets from a bin within the extent
+        rows = np.arange(nf)
+        step = n - int(noverlap)
+        K = max(int(n_windows), 1)
+        nseg = max(int(n_segments), 1)
+        shifts = [(0, float(K))]
+        m = 1
+        while step > 0 and m * step < n:
+            if K - m * nseg > 0:
+                shifts.append((m * step, float(K - m * nseg)))
+            m += 1
+        tot = np.zeros((nf, nf))
+        e = np.zeros(nf)
+        for q in range(min(2 * ext, nf - 1) + 1):
+            oq = o[o - q * ov >= -ext * ov]
+            prod = W[oq % (n * ov)] * np.conj(W[(oq - q * ov) % (n * ov)])
+            gi = (rows[: nf - q, None] + ext) * ov + oq[None, :]  # grid index of row j
+            Sg = S[gi]
+            for shift, weight in shifts:
+                if shift == 0:
+                    c = np.abs(np.sum(Sg * prod, axis=1)) ** 2
+                    if q == 0:
+                        e = np.sqrt(c)
+                    val = weight * c
+                else:
+                    # pairs in both orders: |C_jk(s)|^2 + |C_kj(s)|^2 = |C_jk(s)|^2 + |C_jk(-s)|^2
+                    ph = np.exp(-2j * np.pi * grid[gi] * shift / (n * ov))
+                    val = weight * (np.abs(np.sum(Sg * ph * prod, axis=1)) ** 2
+                                    + np.abs(np.sum(Sg * ph.conj() * prod, axis=1)) ** 2)
+                tot[rows[: nf - q], rows[: nf - q] + q] += val
+        tot = np.triu(tot) + np.triu(tot, 1).T
+        sel = bins - lo
+        tot = tot[np.ix_(sel, sel)]
+        e = e[sel]
+        return np.asarray(tot / (K * K * np.outer(e, e)), np.float64)
 
 
 _WINDOW_CACHE: dict[tuple[Any, int], WindowProperties] = {}

@@ -140,8 +140,10 @@ class AnalysisSettings:
         Band searched for peaks (Hz); None: the analysis default.
     max_peaks : int
         Most prominent peaks kept per channel.
-    response : {'displacement', 'velocity', 'acceleration'}
-        SDOF response fitted to each peak.
+    response : {'auto', 'displacement', 'velocity', 'acceleration'}
+        SDOF response fitted to each peak; ``"auto"`` (default): the one the channel's unit
+        names (:func:`rigtools.analysis.recording.response_for_unit`), and for a unit that
+        names none, the best-fitting one, flagged ``response_guessed``.
     low_snr_dB : float
         Threshold of the ``low_snr`` flag (dB): a natural frequency whose peak prominence is
         below it, or a mesh harmonic this little above the order-spectrum floor.
@@ -157,7 +159,7 @@ class AnalysisSettings:
     prominence_dB: float = 6.0
     f_range_Hz: tuple[float, float] | None = None
     max_peaks: int = 20
-    response: Literal["displacement", "velocity", "acceleration"] = "displacement"
+    response: Literal["auto", "displacement", "velocity", "acceleration"] = "auto"
     low_snr_dB: float = 10.0
     revs_per_block: int = 8
     min_step_duration_s: float = 1.0
@@ -224,6 +226,12 @@ class Campaign:
     path : pathlib.Path
         The campaign file.
     description, rig : str
+    calibration : dict or None
+        The ``[calibration]`` block as written (schema-checked; resolved and checked in depth by
+        :func:`rigtools.calibration.parse_calibration_block`), None when absent.
+    key_lines : dict
+        Line of every key of the file, by its path (``("calibration", "priors", "backlash")``);
+        :meth:`line_of` looks keys up in it.
     """
 
     name: str
@@ -237,6 +245,22 @@ class Campaign:
     path: Path
     description: str = ""
     rig: str = ""
+    calibration: dict[str, Any] | None = field(default=None, compare=False, repr=False)
+    key_lines: dict[tuple[Any, ...], int] = field(default_factory=dict, compare=False,
+                                                 repr=False)
+
+    def line_of(self, dotted_key: str) -> int | None:
+        """Line of a dotted key such as ``"calibration.priors.backlash.lower"``.
+
+        The line of the nearest enclosing table written in the file when the key itself is
+        not; None when neither is found.
+        """
+        p: tuple[Any, ...] = tuple(dotted_key.split("."))
+        while p:
+            if p in self.key_lines:
+                return self.key_lines[p]
+            p = p[:-1]
+        return None
 
     @property
     def pinion_teeth(self) -> int:
@@ -530,7 +554,8 @@ def load_campaign(path: str | Path) -> Campaign:
     return Campaign(name=camp["name"], gear_set=gear_set, gear_set_path=gear_set_path,
                     gear=gear, sensors=sensors, thermal=thermal, analysis=analysis,
                     runs=tuple(runs), path=p, description=camp.get("description", ""),
-                    rig=camp.get("rig", ""))
+                    rig=camp.get("rig", ""), calibration=doc.get("calibration"),
+                    key_lines=dict(lines.lines))
 
 
 def _opt_float(v: Any) -> float | None:

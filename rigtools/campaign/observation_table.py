@@ -41,7 +41,9 @@ FLAGS: Final[dict[str, str]] = {
     "low_snr": "peak prominence or mesh harmonic level under [analysis] low_snr_dB",
     "windows_dropped": "valid segments shorter than a Welch window, or order blocks lost to gaps",
     "ingest_losses": "frames or messages rejected at ingest",
-    "at_mesh_line": "a broad peak within tolerance of a mesh harmonic, sideband or shaft line",
+    "at_mesh_line": "a mesh harmonic (up to the analysis' max_mesh_order), sideband or shaft "
+                    "line sits on the mode, within its half-power band: masked out of its fit, "
+                    "it has its own line row",
     "no_structural_peak": "no structural peak found in the channel's PSD",
     "peaks_failed": "the peak analysis of the channel failed",
     "constant": "every valid sample equal",
@@ -57,6 +59,12 @@ FLAGS: Final[dict[str, str]] = {
     "above_passband": "a mesh harmonic above the angular resampler's passband",
     "arms_failed": "the order analysis of the channel failed",
     "run_failed": "the run could not be read or analysed",
+    "time_base_irregular": "a sample rate was estimated from stamps that do not fit a uniform "
+                           "grid (a stamp more than half a sample off it, the logger clock "
+                           "drifting by more than 100 ppm, stamps backwards, or samples moved "
+                           "to a free slot)",
+    "response_guessed": "the channel's unit does not say what it measures: the single-DOF "
+                        "response fitted was chosen as the one that fits best",
 }
 
 

@@ -21,9 +21,13 @@ quantity            rows
                     channel's quality (gaps, clipping, Welch windows, dropped segments)
 ``natural_frequency``
                     one per structural PSD peak of a channel (``mode_index`` 0, 1, ... by
-                    frequency): ``f_n_Hz``, ``f_n_std_Hz``, ``zeta``, ``zeta_std`` (SDOF fit),
-                    half-power damping, prominence; also a *broad* peak on a mesh or shaft line
-                    (a resonance may coincide with it), flagged ``at_mesh_line``
+                    frequency; ``peak_kind = "structural"``): ``f_n_Hz``, ``f_n_std_Hz``,
+                    ``zeta``, ``zeta_std`` (SDOF fit of the ``response`` column), half-power
+                    damping, prominence. A broad peak is a mode wherever it sits; a mesh or
+                    shaft line on it is masked out of its fit and flags it ``at_mesh_line``
+``line``            one per line that sits on a mode (within its half-power band): ``f_Hz``,
+                    ``peak_kind`` (``mesh_harmonic``, ``mesh_sideband``, ``shaft_harmonic``,
+                    ``tonal``), prominence, and the ``mode_index`` of the mode it sits on
 ``arms``            one per channel x speed step (``segment = "step"``, ``step_index``), when
                     ``[sensors] speed`` is set: step speed, mesh frequency, amplitudes of mesh
                     harmonics 1-3 and :math:`A_{rms} = \sqrt{A_1^2 + A_2^2 + A_3^2}`; when the
@@ -46,8 +50,13 @@ Four boolean columns (``flag_gaps``, ``flag_clipping``, ``flag_low_snr``,
 ``"flagged"`` (a value, with flags) or ``"failed"`` (no value; ``message`` says why). A
 ``run`` row is ``"flagged"`` as soon as any row of the run is failed or flagged: its flags are
 the union of theirs and its message counts them per channel. Low SNR: a natural frequency whose
-peak prominence, or a mesh harmonic whose level above the order-spectrum floor (in the same
-bandwidth), is under ``[analysis] low_snr_dB`` (default 10 dB).
+peak prominence, or a mesh harmonic whose level (its local floor subtracted) above the
+order-spectrum floor (in the same bandwidth), is under ``[analysis] low_snr_dB`` (default
+10 dB). A flag means a user should
+look: a mode merely near a mesh harmonic is not flagged (only a mesh or shaft line found on
+it, within its half-power band, is), and a sample rate estimated from stamps that fit a
+uniform grid (to within half a sample, the logger clock drifting by at most 100 ppm) is not
+worth a warning (stamps that do not fit flag the run ``time_base_irregular``).
 
 Failures
 --------
@@ -71,7 +80,9 @@ the resolved campaign, analysis settings and library versions (``rigtools.observ
 
 from __future__ import annotations
 
+import ast
 import math
+import re
 from collections.abc import Callable
 from typing import Any, Final
 
@@ -85,6 +96,7 @@ from rigtools.analysis.orders import (
     run_up_curve_from_recording,
     step_levels_from_recording,
 )
+from rigtools.analysis.peaks import LINE_KINDS, MAX_MESH_ORDER, Peak, PeakAnalysis
 from rigtools.analysis.recording import ChannelAnalysis, analyse_recording
 from rigtools.analysis.speed import SpeedProfile, SpeedStep, detect_speed_steps, speed_profile
 from rigtools.campaign.manifest import CONDITION_KEYS, Campaign, CampaignRun
@@ -98,7 +110,7 @@ from rigtools.campaign.observation_table import (
 from rigtools.errors import MissingSpeedError, RigtoolsError
 from rigtools.ingest import RunMetadata, read
 from rigtools.ingest.reader import versions
-from rigtools.ingest.recording import Recording
+from rigtools.ingest.recording import IngestReport, Recording
 
 __all__ = ["observe_campaign", "observe_run"]
 
@@ -115,6 +127,18 @@ _TEMPERATURE_OFFSET_C: Final[dict[str, float]] = {
     "degC": 0.0, "°C": 0.0, "C": 0.0, "deg C": 0.0, "celsius": 0.0, "K": -273.15,
 }
 _HARMONICS: Final = (1, 2, 3)
+#: Lines that flag the mode they sit on ``at_mesh_line``.
+_MESH_LINES: Final = ("mesh_harmonic", "mesh_sideband", "shaft_harmonic")
+#: The MCAP reader's notes on a sample rate estimated from the stamps, and on samples moved.
+_ESTIMATED_RATE: Final = re.compile(r"topic ('(?:[^'\\]|\\.)*'|\"(?:[^\"\\]|\\.)*\"): "
+                                    r"(?:sample rate \S+ Hz estimated from|"
+                                    r"(?P<moved>\d+) Imu sample\(s\) jittered)")
+#: A time base fits its stamps when none is farther than this fraction of a sample from it
+#: (after the clock drift) ...
+_STAMP_FIT_SAMPLES: Final = 0.5
+#: ... and the logger clock drifts from the sample clock by at most this (ppm): a frequency
+#: scale error of 0.01 %, a tenth of the 0.1 % natural frequencies are held to.
+_MAX_DRIFT_PPM: Final = 100.0
 
 
 # --------------------------------------------------------------------------------------------
@@ -303,7 +327,10 @@ def _observe_run(campaign: Campaign, run: CampaignRun, base: dict[str, Any]
         run_flags.append("ingest_losses")
     if rep.gaps:
         run_flags.append("gaps")
-    notes.extend(rep.warnings)
+    kept, irregular = _time_base_warnings(rep, rec)
+    if irregular:
+        run_flags.append("time_base_irregular")
+    notes.extend(kept)
     if rep.n_rejected:
         notes.append(f"{rep.n_rejected} {rep.units} rejected at ingest: " + ", ".join(
             f"{n} {reason}" for reason, n in sorted(rep.rejected.items())))
@@ -349,6 +376,59 @@ def _speed_varies(profile: SpeedProfile, rel_tolerance: float, z1: int, z_tracke
             "the swept mesh line, not a structural mode")
 
 
+def _time_base_warnings(rep: IngestReport, rec: Recording) -> tuple[list[str], bool]:
+    """The ingest warnings worth a note, and whether a time base is irregular.
+
+    The MCAP reader notes every sample rate it estimated from the stamps. When the stamps of
+    every channel of that topic fit the uniform grid (:func:`_stamps_fit`) and no sample was
+    moved, the rate is exact: the note is dropped. Otherwise it stays and the run is flagged
+    ``time_base_irregular``. Every other warning stays.
+    """
+    kept: list[str] = []
+    irregular = False
+    for w in rep.warnings:
+        m = _ESTIMATED_RATE.match(w)
+        if m is None:
+            kept.append(w)
+            continue
+        try:
+            topic = str(ast.literal_eval(m.group(1)))
+        except (ValueError, SyntaxError):
+            kept.append(w)
+            continue
+        fits = m.group("moved") is None and _stamps_fit(rep, rec, topic)
+        if not fits:
+            kept.append(w)
+            irregular = True
+    return kept, irregular
+
+
+def _stamps_fit(rep: IngestReport, rec: Recording, topic: str) -> bool:
+    """Every channel of ``topic`` has its stamps on its grid.
+
+    From the ingest's clock statistics (``report.timebase``): the logger clock drifts from
+    the grid by at most ``_MAX_DRIFT_PPM``, every stamp lies within ``_STAMP_FIT_SAMPLES`` of
+    a sample once that drift is allowed for (the residual from the median offset of a clock
+    drifting by d over a record of T reaches ``d T``), and no stamp goes backwards.
+    """
+    chans = [c for c in rec.channels.values() if c.name.startswith(f"{topic}/")]
+    if not chans:
+        return False
+    for c in chans:
+        st = rep.timebase.get(c.name)
+        if not st or not c.sample_rate_Hz > 0:
+            return False
+        drift = abs(float(st.get("drift_ppm", 0.0))) * 1e-6
+        if not drift <= _MAX_DRIFT_PPM * 1e-6:
+            return False
+        worst = float(st.get("max_abs_residual_s", math.inf))
+        if not worst <= _STAMP_FIT_SAMPLES / c.sample_rate_Hz + drift * len(c) / c.sample_rate_Hz:
+            return False
+        if float(st.get("n_stamps_backwards", 0.0)) > 0:
+            return False
+    return True
+
+
 def _aggregate(rows: list[dict[str, Any]]) -> tuple[list[str], list[str]]:
     """The flags of a run's failed or flagged rows, and one note per channel x quantity x status."""
     flags: list[str] = []
@@ -371,7 +451,7 @@ def _aggregate(rows: list[dict[str, Any]]) -> tuple[list[str], list[str]]:
 
 def _channel_rows(base: dict[str, Any], rec: Recording, ca: ChannelAnalysis, campaign: Campaign,
                   speed_note: str | None = None) -> tuple[list[dict[str, Any]], bool]:
-    """The rms row and the natural_frequency rows of a channel; and whether it was analysed."""
+    """The rms, natural_frequency and line rows of a channel; and whether it was analysed."""
     a = campaign.analysis
     q = ca.quality
     flags: list[str] = []
@@ -413,38 +493,75 @@ def _channel_rows(base: dict[str, Any], rec: Recording, ca: ChannelAnalysis, cam
         rms["_flags"].append("peaks_failed")
         msgs.append(ca.error or "peak analysis failed")
     else:
-        k = 0
-        for pk in ca.peaks.peaks:
-            if pk.mode is None or not (pk.kind == "structural" or pk.possible_resonance):
-                continue
-            m = pk.mode
-            pflags = [f for f in flags if f != "unit_not_acceleration"]
-            pmsg = []
-            loc = pk.location
-            if loc.kind is not None:
-                pflags.append("at_mesh_line")
-                pmsg.append(f"broad peak within tolerance of a {loc.kind.replace('_', ' ')} "
-                            f"({loc.expected_Hz:.1f} Hz): a resonance, the line may bias it")
-            if pk.prominence_dB < a.low_snr_dB:
-                pflags.append("low_snr")
-                pmsg.append(f"prominence {pk.prominence_dB:.1f} dB < {a.low_snr_dB:g} dB")
-            if speed_note is not None:
-                pflags.append("speed_varies")
-                pmsg.append(speed_note)
-            rows.append({
-                **common, "quantity": "natural_frequency", "mode_index": k,
-                "f_n_Hz": _finite(m.f_n_Hz), "f_n_std_Hz": _finite(m.f_n_std_Hz),
-                "zeta": _finite(m.zeta), "zeta_std": _finite(m.zeta_std),
-                "zeta_half_power": _finite(m.zeta_half_power),
-                "zeta_half_power_std": _finite(m.zeta_half_power_std),
-                "peak_kind": pk.kind, "prominence_dB": float(pk.prominence_dB),
-                "snr_dB": float(pk.prominence_dB), "message": "; ".join(pmsg),
-                "_flags": pflags})
-            k += 1
-        if k == 0:
+        base_flags = [f for f in flags if f != "unit_not_acceleration"]
+        if getattr(ca, "response_source", "") == "guessed":
+            base_flags.append("response_guessed")
+        rows.extend(_peak_rows(common, ca, ca.peaks, base_flags, a.low_snr_dB, speed_note))
+        if not ca.peaks.structural:
             rms["_flags"].append("no_structural_peak")
     rms["message"] = "; ".join(msgs)
     return [_status(r) for r in rows], True
+
+
+def _line_name(pk: Peak) -> str:
+    """``mesh harmonic 5 (2000.0 Hz)`` and the like."""
+    loc = pk.location
+    what = pk.kind.replace("_", " ")
+    if pk.kind == "mesh_harmonic":
+        what = f"mesh harmonic {loc.harmonic}"
+    elif pk.kind == "mesh_sideband":
+        what = f"sideband {loc.sideband:+d} of mesh harmonic {loc.harmonic}"
+    elif pk.kind == "shaft_harmonic":
+        what = f"shaft harmonic {loc.harmonic}"
+    return f"{what} ({pk.f_Hz:.1f} Hz)"
+
+
+def _peak_rows(common: dict[str, Any], ca: ChannelAnalysis, pa: PeakAnalysis,
+               base_flags: list[str], low_snr_dB: float, speed_note: str | None
+               ) -> list[dict[str, Any]]:
+    """The natural_frequency rows of a channel's structural peaks, and the lines on them."""
+    rows: list[dict[str, Any]] = []
+    response = getattr(ca, "response", None)
+    for i, pk in enumerate(pa.structural):
+        m = pk.mode
+        if m is None:
+            continue
+        pflags = list(base_flags)
+        pmsg = []
+        mesh = [q for q in pa.lines_on(i) if q.kind in _MESH_LINES]
+        if mesh:
+            pflags.append("at_mesh_line")
+            pmsg.append(", ".join(_line_name(q) for q in mesh) + " on the mode (within its "
+                        "half-power band), masked out of its fit: f_n and zeta rest on the "
+                        "rest of the peak; see the line row")
+        if pk.prominence_dB < low_snr_dB:
+            pflags.append("low_snr")
+            pmsg.append(f"prominence {pk.prominence_dB:.1f} dB < {low_snr_dB:g} dB")
+        if speed_note is not None:
+            pflags.append("speed_varies")
+            pmsg.append(speed_note)
+        rows.append({
+            **common, "quantity": "natural_frequency", "mode_index": i,
+            "f_n_Hz": _finite(m.f_n_Hz), "f_n_std_Hz": _finite(m.f_n_std_Hz),
+            "zeta": _finite(m.zeta), "zeta_std": _finite(m.zeta_std),
+            "zeta_half_power": _finite(m.zeta_half_power),
+            "zeta_half_power_std": _finite(m.zeta_half_power_std),
+            "peak_kind": pk.kind, "response": response or m.response,
+            "prominence_dB": float(pk.prominence_dB), "snr_dB": float(pk.prominence_dB),
+            "message": "; ".join(pmsg), "_flags": pflags})
+    for q in pa.peaks:
+        if q.on_mode is None or q.kind not in LINE_KINDS:
+            continue
+        lflags = list(base_flags)
+        lmsg = [f"{_line_name(q)} on mode {q.on_mode}"]
+        if speed_note is not None:
+            lflags.append("speed_varies")
+            lmsg.append(speed_note)
+        rows.append({
+            **common, "quantity": "line", "mode_index": q.on_mode, "f_Hz": float(q.f_Hz),
+            "peak_kind": q.kind, "prominence_dB": float(q.prominence_dB),
+            "message": "; ".join(lmsg), "_flags": lflags})
+    return rows
 
 
 def _order_floor_snr_db(sl: StepLevels, i: int) -> float | None:
@@ -528,7 +645,7 @@ def _arms_rows(base: dict[str, Any], rec: Recording, name: str, rms_row: dict[st
             **row, "mesh_frequency_Hz": f_mesh,
             "step_speed_rpm": float(speed_rpm_from_mesh_frequency(f_mesh, z1)),
             "a1_m_s2": _finite(amp[0]), "a2_m_s2": _finite(amp[1]), "a3_m_s2": _finite(amp[2]),
-            "arms_m_s2": _finite(sl.arms[i] * factor), "snr_dB": snr,
+            "arms_m_s2": _finite(sl.arms[i] * factor), "snr_dB": _finite(snr),
             "message": "; ".join(msg), "_flags": flags}))
     return rows
 
@@ -595,7 +712,7 @@ def _ramp_rows(common: dict[str, Any], rec: Recording, name: str, profile: Speed
             "mesh_frequency_Hz": f_mesh,
             "step_speed_rpm": float(speed_rpm_from_mesh_frequency(f_mesh, z1)),
             "a1_m_s2": _finite(amp[0]), "a2_m_s2": _finite(amp[1]), "a3_m_s2": _finite(amp[2]),
-            "arms_m_s2": _finite(rc.arms[i] * factor), "snr_dB": snr,
+            "arms_m_s2": _finite(rc.arms[i] * factor), "snr_dB": _finite(snr),
             "message": "; ".join(msg), "_flags": flags}))
     return rows
 
@@ -641,6 +758,7 @@ def _metadata(campaign: Campaign, runs: list[RunObservations]) -> dict[str, Any]
         "gear": {"name": campaign.gear.name, "z1": campaign.pinion_teeth,
                  "z2": campaign.wheel_teeth},
         "harmonics": list(_HARMONICS),
+        "max_mesh_order": MAX_MESH_ORDER,
         "flags": FLAGS,
         "versions": versions(),
         "runs": [{"id": r.run_id, "file": r.file, "analysed": r.analysed, "error": r.error}

@@ -1,4 +1,4 @@
-"""Helpers shared by subcommands: reading with the common options, loss warnings, exit codes.
+"""Helpers shared by subcommands: reading with the common options, output paths, loss warnings.
 
 Every error line goes through :func:`fail` (``rigtools: error: <one line>``).
 """
@@ -6,12 +6,15 @@ Every error line goes through :func:`fail` (``rigtools: error: <one line>``).
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import sys
+from pathlib import Path
 from typing import Final
 
 from rigtools.ingest import Recording, read
-from rigtools.recording_summary import unit_of
+from rigtools.ingest.registry import READERS
+from rigtools.recording_summary import loss_warnings
 
 __all__ = [
     "EXIT_OK",
@@ -20,6 +23,7 @@ __all__ = [
     "add_read_options",
     "fail",
     "one_line",
+    "output_problem",
     "read_from_args",
     "warn_losses",
 ]
@@ -35,8 +39,12 @@ EXIT_UNUSABLE: Final = 3
 def add_read_options(p: argparse.ArgumentParser) -> None:
     """``--dbc``, ``--map`` and ``--format`` for subcommands that read recordings."""
     p.add_argument("--dbc", help="DBC for CAN logs (default: the reference layout)")
-    p.add_argument("--map", dest="mapping", help="channel mapping file (TOML)")
-    p.add_argument("--format", dest="fmt", help="force a reader (default: detect from content)")
+    p.add_argument("--map", dest="mapping",
+                   help="channel mapping file (TOML, data_schemas/channel_mapping.schema.json): "
+                   "which CAN signals or MCAP fields make which channel")
+    p.add_argument("--format", dest="fmt", choices=sorted(READERS), metavar="FORMAT",
+                   help="force a reader, one of: " + ", ".join(sorted(READERS))
+                   + " (default: detect from content)")
 
 
 def read_from_args(args: argparse.Namespace) -> Recording:
@@ -44,20 +52,56 @@ def read_from_args(args: argparse.Namespace) -> Recording:
     return read(args.file, dbc=args.dbc, mapping=args.mapping, fmt=args.fmt)
 
 
+def output_problem(path: str | Path, *, folder: bool = False) -> str | None:
+    """Why ``path`` cannot be written, or None; checked before any work.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A file to write (or, with ``folder``, a folder to create or fill).
+    folder : bool
+        ``path`` is a folder: it may exist (as a folder) or be created with its parents.
+
+    Returns
+    -------
+    str or None
+        A message naming the path and the reason: a folder given as a file (or a file given
+        as a folder), a folder that does not exist, or is not writable.
+    """
+    p = Path(path)
+    if folder:
+        if p.exists() and not p.is_dir():
+            return f"{p}: expected a folder, found a file"
+        base = p
+        while not base.exists():  # the folder will be created with its parents
+            base = base.parent
+        if not base.is_dir():
+            return f"{p}: cannot create the folder: {base} is a file"
+        if not os.access(base, os.W_OK | os.X_OK):
+            return f"{p}: cannot create or fill the folder: {base} is not writable"
+        return None
+    if p.is_dir():
+        return f"{p}: expected a file to write, found a folder"
+    parent = p.parent
+    if not parent.exists():
+        return f"{p}: cannot write the file: no such folder {parent}"
+    if not parent.is_dir():
+        return f"{p}: cannot write the file: {parent} is not a folder"
+    if not os.access(parent, os.W_OK | os.X_OK):
+        return f"{p}: cannot write the file: the folder {parent} is not writable"
+    if p.exists() and not os.access(p, os.W_OK):
+        return f"{p}: cannot write the file: it exists and is not writable"
+    return None
+
+
 def warn_losses(rec: Recording) -> None:
-    """One warning line on stderr per kind of loss, so "usable with losses" is visible."""
-    rep = rec.report
-    for reason, n in sorted(rep.rejected.items()):
-        where = rep.first_position.get(reason)
-        at = f" (first at {where})" if where else ""
-        print(f"rigtools: warning: {n} {unit_of(reason, rep.units)} rejected: {reason}{at}",
-              file=sys.stderr)
-    if rep.gaps:
-        missing = sum(g.n_missing for g in rep.gaps)
-        print(f"rigtools: warning: {len(rep.gaps)} gap(s) in sample counters, "
-              f"{missing} sample(s) missing", file=sys.stderr)
-    for w in rep.warnings:
-        print(f"rigtools: warning: {one_line(w)}", file=sys.stderr)
+    """One warning line on stderr per kind of loss, so "usable with losses" is visible.
+
+    Frames (or messages) and samples are counted apart
+    (:func:`rigtools.recording_summary.loss_warnings`).
+    """
+    for line in loss_warnings(rec):
+        print(f"rigtools: warning: {one_line(line)}", file=sys.stderr)
 
 
 def one_line(message: str) -> str:

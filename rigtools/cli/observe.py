@@ -17,7 +17,8 @@ import sys
 from typing import TYPE_CHECKING, Any
 
 from rigtools.campaign import load_campaign, write_observations
-from rigtools.cli.common import fail, one_line
+from rigtools.cli.arguments import output_path
+from rigtools.cli.common import fail, one_line, output_problem
 
 if TYPE_CHECKING:
     from rigtools.campaign import Observations, RunObservations
@@ -35,7 +36,10 @@ def add_parser(subparsers: Any) -> None:
         "quality flags and provenance per run and channel.",
     )
     p.add_argument("campaign", help="campaign manifest (TOML)")
-    p.add_argument("-o", "--output", required=True, help="output .parquet file")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.parquet",
+                   type=output_path(".parquet"),
+                   help="output file; its suffix must be .parquet (checked, with its folder, "
+                   "before any run is read)")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="show (--progress) or hide (--no-progress) the progress bar over runs "
                    "on stderr; default: shown when stderr is a terminal")
@@ -90,12 +94,15 @@ def format_summary(obs: Observations) -> str:
 
     ``modes`` counts clean modes (status ``ok``) over all found: a flagged mode (clipped
     channel, low SNR, at a mesh line, swept mesh line) is not clean. ``f_n`` and ``zeta`` are
-    the medians over the channels of the lowest clean mode. ``steps`` counts speed steps, or
-    says ``ramp`` when Arms was read along a ramp.
+    the medians over the channels of the lowest clean mode; a run without a clean mode shows
+    those of its lowest flagged modes, marked ``*`` (the table holds them, with their flags).
+    ``steps`` counts speed steps, or says ``ramp`` when Arms was read along a ramp.
     """
     df = obs.table
-    lines = [f"{'run':<16}{'status':<9}{'channels':>9}{'modes':>7}{'f_n Hz':>10}{'zeta':>8}"
+    w = max([16, *(len(r.run_id) + 2 for r in obs.runs)])
+    lines = [f"{'run':<{w}}{'status':<9}{'channels':>9}{'modes':>7}{'f_n Hz':>10}{'zeta':>8}"
              f"{'steps':>7}{'Arms m/s^2':>12}"]
+    marked = False
     for r in obs.runs:
         rows = df[df["run_id"] == r.run_id]
         run_row = rows[rows["quantity"] == "run"]
@@ -104,17 +111,23 @@ def format_summary(obs: Observations) -> str:
         n_ok = int((rms["status"] != "failed").sum())
         found = rows[(rows["quantity"] == "natural_frequency") & (rows["status"] != "failed")]
         modes = found[found["status"] == "ok"]
-        lowest = modes.sort_values("mode_index").groupby("channel", sort=False).head(1)
+        shown, mark = (modes, "") if len(modes) else (found, "*" if len(found) else "")
+        shown = shown[shown["f_n_Hz"].notna()]  # a row without a fitted f_n says nothing here
+        lowest = shown.sort_values("mode_index").groupby("channel", sort=False).head(1)
+        f_n = _fmt(lowest["f_n_Hz"].median() if len(lowest) else None, ".1f")
+        zeta = _fmt(lowest["zeta"].median() if len(lowest) else None, ".4f")
+        if f_n != "-" and mark:
+            f_n, zeta, marked = f_n + mark, zeta + mark, True
         arms = rows[(rows["quantity"] == "arms") & (rows["status"] != "failed")]
         steps = arms[arms["segment"] != "ramp"]
         n_steps = "ramp" if len(arms) and not len(steps) else str(steps["step_index"].nunique())
         lines.append(
-            f"{r.run_id:<16}{status:<9}{f'{n_ok}/{len(rms)}':>9}"
-            f"{f'{len(modes)}/{len(found)}':>7}"
-            f"{_fmt(lowest['f_n_Hz'].median() if len(lowest) else None, '.1f'):>10}"
-            f"{_fmt(lowest['zeta'].median() if len(lowest) else None, '.4f'):>8}"
-            f"{n_steps:>7}"
+            f"{r.run_id:<{w}}{status:<9}{f'{n_ok}/{len(rms)}':>9}"
+            f"{f'{len(modes)}/{len(found)}':>7}{f_n:>10}{zeta:>8}{n_steps:>7}"
             f"{_fmt(arms['arms_m_s2'].max() if len(arms) else None, '.3g'):>12}")
+    if marked:
+        lines.append("* no clean mode in the run: its lowest flagged modes (see quality_flags "
+                     "and message in the table)")
     return "\n".join(lines)
 
 
@@ -124,6 +137,9 @@ def run(args: argparse.Namespace) -> int:
     # the command line starts.
     from rigtools.campaign.observe import observe_campaign
 
+    problem = output_problem(args.output)
+    if problem:
+        return fail(problem)
     campaign = load_campaign(args.campaign)
     progress = _Progress(len(campaign.runs), getattr(args, "progress", None))
 

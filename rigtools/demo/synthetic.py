@@ -104,7 +104,10 @@ def synthetic_run(
     wd = wn * np.sqrt(1 - zeta**2)
     r = np.exp(-zeta * wn / fs)
     a = np.array([1.0, -2 * r * np.cos(wd / fs), r * r])
-    b = np.array([a.sum()])  # unit gain at DC, like the analogue FRF
+    # Acceleration response (the accelerometers' unit): the displacement filter times a second
+    # difference, zero at DC, scaled to the displacement filter's gain at f_n (the accelerance
+    # -w^2 H of the analogue SDOF, up to that constant).
+    b = a.sum() / (4 * np.sin(wn / fs / 2) ** 2) * np.array([1.0, -2.0, 1.0])
     channels = {}
     for k in range(n_channels):
         gain = 1.0 / (1 + 0.3 * k)

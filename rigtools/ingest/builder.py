@@ -10,6 +10,7 @@ data.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from dataclasses import dataclass, field
 
@@ -83,6 +84,7 @@ class RecordingBuilder:
         self._restarts: dict[str, set[int]] = {}
         # second clocks of a channel, by clock name: (stamp_index parts, stamps_s parts)
         self._other_clocks: dict[str, dict[str, tuple[list[np.ndarray], list[np.ndarray]]]] = {}
+        self._carriers: dict[str, dict[str, str | int]] = {}
 
     def add_samples(
         self,
@@ -217,6 +219,29 @@ class RecordingBuilder:
             stats["offset_s"] = float(t1 - t0)
             self.report.timebase[f"{name}@{clock}"] = stats
 
+    def note_carrier(self, channel: str, source: str, samples_per_frame: int) -> None:
+        """Say which frames or messages carry a channel, and how many samples each holds.
+
+        Channels of one ``source`` (a CAN message on one bus, an MCAP topic) lose samples
+        together when one of its frames is lost: :func:`rigtools.ingest.losses.loss_tally`
+        counts such a loss once, in frames. The built Recording keeps the carriers in
+        ``provenance.layout["carriers"]`` (channel -> ``{"source", "samples_per_frame"}``),
+        for the channels it holds.
+
+        Parameters
+        ----------
+        channel : str
+            Channel name, as given to :meth:`add_samples`.
+        source : str
+            What carries it, in words the user knows (``"message 'ACC1'"``,
+            ``"topic '/imu'"``); equal for channels fed by the same frames.
+        samples_per_frame : int
+            Consecutive samples of the channel in each frame or message (>= 1).
+        """
+        if samples_per_frame < 1:
+            raise ValueError(f"`samples_per_frame` must be >= 1, was {samples_per_frame}")
+        self._carriers[channel] = {"source": source, "samples_per_frame": int(samples_per_frame)}
+
     def mark_restart(self, channel: str, index: int) -> None:
         """Note that the source's counter restarted at sample ``index`` (gap kind "restart")."""
         self._restarts.setdefault(channel, set()).add(int(index))
@@ -248,6 +273,10 @@ class RecordingBuilder:
             s = self._build_slow(name, self._slow.pop(name))
             if s is not None:
                 slow[name] = s
+        carriers = {name: self._carriers[name] for name in channels if name in self._carriers}
+        if carriers:
+            provenance = dataclasses.replace(
+                provenance, layout={**provenance.layout, "carriers": carriers})
         return Recording(channels, slow, metadata, provenance)
 
     def _build_channel(self, name: str, parts: _ChannelParts) -> Channel | None:

@@ -124,6 +124,8 @@ def load_mapping(path: str | Path) -> ChannelMapping:
         doc = tomllib.loads(text)
     except FileNotFoundError:
         raise MappingError(p, None, "a mapping file", "no such file") from None
+    except IsADirectoryError:
+        raise MappingError(p, None, "a mapping file", "a directory") from None
     except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         raise MappingError(p, None, "a TOML mapping file", None, str(exc)) from exc
     errors = iter_errors(doc, "channel_mapping.schema.json")

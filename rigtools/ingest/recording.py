@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "SAMPLE_REASONS",
     "Channel",
     "Gap",
     "IngestReport",
@@ -33,7 +34,18 @@ __all__ = [
     "Recording",
     "RunMetadata",
     "SlowSignal",
+    "counts_samples",
 ]
+
+#: Endings of rejection reasons that count samples or points, not frames or messages
+#: (``non_finite_sample``, ``duplicate_sample``, ``implausible_sample_index``,
+#: ``non_finite_timestamp``, ``inconsistent_channel_layout``).
+SAMPLE_REASONS = ("_sample", "_sample_index", "_timestamp", "inconsistent_channel_layout")
+
+
+def counts_samples(reason: str) -> bool:
+    """True when a rejection ``reason`` counts samples (or slow-signal points), not frames."""
+    return reason.endswith(SAMPLE_REASONS)
 
 
 @dataclass(frozen=True, eq=False)
@@ -165,11 +177,16 @@ class IngestReport:
         Frames or messages that contributed data.
     rejected : collections.Counter
         Frames, messages or samples not used, by reason (e.g. ``"error_frame"``,
-        ``"id_not_in_dbc"``, ``"no_decoder"``, ``"truncated_chunk"``).
+        ``"id_not_in_dbc"``, ``"no_decoder"``, ``"truncated_chunk"``). A frame is counted once
+        whatever number of channels it feeds; reasons for which :func:`counts_samples` holds
+        count samples (:attr:`n_rejected_samples`), the others ``units``
+        (:attr:`n_rejected_frames`).
     first_position : dict
         For each reason, where it first happened (byte offset, line, record).
     gaps : list of Gap
-        Gaps in sample counters.
+        Gaps in sample counters, per channel and in samples: the frames of a message that
+        feeds several channels leave one gap in each (:func:`rigtools.ingest.losses.
+        loss_tally` counts them once, in frames).
     warnings : list of str
         Everything else worth telling the user (timestamps backwards, clock drift, ...).
     timebase : dict
@@ -202,8 +219,21 @@ class IngestReport:
 
     @property
     def n_rejected(self) -> int:
-        """Total count of rejections over all reasons."""
+        """Total count of rejections over all reasons, frames and samples added.
+
+        :attr:`n_rejected_frames` and :attr:`n_rejected_samples` count one kind each.
+        """
         return int(sum(self.rejected.values()))
+
+    @property
+    def n_rejected_frames(self) -> int:
+        """Frames or messages (``units``) rejected, over the reasons that count them."""
+        return int(sum(n for r, n in self.rejected.items() if not counts_samples(r)))
+
+    @property
+    def n_rejected_samples(self) -> int:
+        """Samples (or slow-signal points) rejected, over the reasons that count them."""
+        return int(sum(n for r, n in self.rejected.items() if counts_samples(r)))
 
     @property
     def has_losses(self) -> bool:

@@ -73,17 +73,22 @@ def detect_format(path: str | Path, fmt: str | None = None) -> str:
     Raises
     ------
     RecordingFormatError
-        The file is empty or missing.
+        The file is empty or missing, or the path is a directory.
     UnsupportedFormatError
         Neither the content nor the suffix names a known format; the message lists them.
     """
     p = Path(path)
+    if p.is_dir():
+        raise RecordingFormatError(p, None, "a recording file", "a directory")
+    if not p.exists():
+        raise RecordingFormatError(p, None, "a recording file", "no such file")
+    if not p.is_file():
+        raise RecordingFormatError(p, None, "a recording file",
+                                   "neither a regular file nor a directory")
     if fmt is not None:
         if fmt not in READERS:
             raise UnsupportedFormatError(p, None, f"one of {sorted(READERS)}", repr(fmt))
         return fmt
-    if not p.is_file():
-        raise RecordingFormatError(p, None, "a recording file", "no such file")
     with open_source(p) as f:
         try:
             head = f.read(_HEAD_BYTES)

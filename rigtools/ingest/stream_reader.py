@@ -168,7 +168,7 @@ class StreamReader(ABC):
         rec = builder.build(meta, placeholder)
         digest, size = hashing.result()
         rec = dataclasses.replace(rec, provenance=dataclasses.replace(
-            placeholder, source_sha256=digest, source_size_bytes=size))
+            rec.provenance, source_sha256=digest, source_size_bytes=size))
         if not rec.channels and not rec.slow:
             reasons = ", ".join(f"{k}: {v}" for k, v in sorted(report.rejected.items())) or "none"
             raise NoDataError(

@@ -47,6 +47,9 @@ class UnwrappedCounter:
         Elements whose counter disagrees with both neighbours and with the logger clock while
         the neighbours agree with each other (a corrupted counter, :func:`counter_outliers`);
         not kept (``keep`` is ``False``, their tick is that of the element before).
+    outlier : numpy.ndarray or None
+        Boolean mask of those elements (None when there is none): with ``keep``, tells a
+        duplicate (``~keep & ~outlier``) from a corrupted counter.
     """
 
     ticks: np.ndarray
@@ -56,6 +59,7 @@ class UnwrappedCounter:
     restarts: np.ndarray
     clock_jumps: int = 0
     n_outlier: int = 0
+    outlier: np.ndarray | None = None
 
 
 #: Consecutive usual steps that mark a backwards counter step as a restart, not a late frame.
@@ -207,7 +211,7 @@ def unwrap_counter(
         keep = np.zeros(n, bool)
         keep[good] = sub.keep
         return UnwrappedCounter(ticks, keep, sub.n_duplicate, sub.n_reordered,
-                                good[sub.restarts], sub.clock_jumps, int(outlier.sum()))
+                                good[sub.restarts], sub.clock_jumps, int(outlier.sum()), outlier)
     return _unwrap(c, int(modulus), stamps_s, tick_rate_Hz, payload)
 
 

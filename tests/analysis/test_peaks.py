@@ -187,23 +187,39 @@ def test_recovery_holds_for_40_seeds_and_uncertainties_are_calibrated(snr_dB):
 # mesh harmonics, sidebands and shaft lines told apart from the resonance
 
 
-def test_mesh_lines_sidebands_and_tones_are_classified():
-    pa = _analyse(rig_signal(20, seed=7))
+def _by_kind(pa) -> dict[str, list[float]]:
     by_kind: dict[str, list[float]] = {}
     for p in pa.peaks:
         by_kind.setdefault(p.kind, []).append(p.f_Hz)
-    assert [round(f) for f in by_kind["mesh_harmonic"]] == [400, 800, 1200, 2800]
+    return by_kind
+
+
+def test_mesh_lines_sidebands_and_tones_are_classified():
+    """Mesh lines are harmonics 1 to ``max_mesh_order`` (default 5, issue 17 item 6).
+
+    The line at the 7th harmonic (2.8 kHz, on the mode's skirt) is then a line like any other,
+    ``tonal``; with ``max_mesh_order=8`` it is a mesh harmonic.
+    """
+    pa = _analyse(rig_signal(20, seed=7))
+    assert pa.max_mesh_order == 5
+    by_kind = _by_kind(pa)
+    assert [round(f) for f in by_kind["mesh_harmonic"]] == [400, 800, 1200]
     sidebands = {(p.location.harmonic, p.location.sideband) for p in pa.of_kind("mesh_sideband")}
     assert sidebands == {(1, -1), (1, 1), (2, -1), (2, 1), (3, -1), (3, 1)}
     assert all(p.location.shaft_Hz == F_PINION for p in pa.of_kind("mesh_sideband"))
     assert [round(f) for f in by_kind["shaft_harmonic"]] == [25]
-    assert [round(f) for f in by_kind["tonal"]] == [round(TONE_HZ)]
+    assert [round(f) for f in by_kind["tonal"]] == [round(TONE_HZ), 7 * F_MESH]
     assert [round(f, -1) for f in by_kind["structural"]] == [round(F_N, -1)]
     assert set(by_kind) == {"mesh_harmonic", "mesh_sideband", "shaft_harmonic", "tonal",
                             "structural"}
     tone = pa.of_kind("tonal")[0].mode
     assert tone.fit.at_lower_bound or tone.zeta <= tone.zeta_resolution
+    # 2.8 kHz lies 3.3 half-power half-widths below the mode: on its skirt, not on the mode
     assert not any(p.possible_resonance for p in pa.peaks)
+    by_kind = _by_kind(_analyse(rig_signal(20, seed=7), max_mesh_order=8))
+    assert [round(f) for f in by_kind["mesh_harmonic"]] == [400, 800, 1200, 2800]
+    assert [round(f) for f in by_kind["tonal"]] == [round(TONE_HZ)]
+    assert [round(f, -1) for f in by_kind["structural"]] == [round(F_N, -1)]
 
 
 def test_without_a_mesh_frequency_lines_are_tonal_and_the_mode_is_still_found():
@@ -216,18 +232,24 @@ def test_without_a_mesh_frequency_lines_are_tonal_and_the_mode_is_still_found():
     assert modes[0].zeta == pytest.approx(ZETA, rel=0.15)
 
 
-def test_a_resonance_on_a_mesh_harmonic_is_a_possible_resonance():
-    """A mode placed on mesh harmonic 8 (3.2 kHz): classified as such, flagged broad."""
+@pytest.mark.parametrize("max_mesh_order", [5, 8])
+def test_a_resonance_on_a_mesh_harmonic_is_a_mode(max_mesh_order):
+    """A mode placed on mesh harmonic 8 (3.2 kHz), no line there: a broad peak is a mode.
+
+    Issue 17 item 6: wherever it sits, also when harmonic 8 counts as a mesh line.
+    """
     run = synthetic_run(duration_s=8.0, n_channels=1, rng=3, f_n_Hz=3200.0)
     s = welch_psd(run.channels["accel_1"], run.sample_rate_Hz, nperseg=4096)
     pa = analyse_peaks(s, mesh_frequency_Hz=run.truth["mesh_frequency_Hz"],
-                       shaft_frequencies_Hz=(25.0,))
+                       shaft_frequencies_Hz=(25.0,), max_mesh_order=max_mesh_order,
+                       response="acceleration")  # the demo's accelerometers
     (p,) = [p for p in pa.peaks if abs(p.f_Hz - 3200.0) < 50.0]
-    assert p.kind == "mesh_harmonic" and p.location.harmonic == 8
-    assert p.possible_resonance
+    assert p.kind == "structural" and not p.possible_resonance
+    assert p.location.harmonic == (8 if max_mesh_order == 8 else None)
     # The synthetic mode is discretised by impulse invariance: its damping is zeta itself.
     assert p.mode.zeta == pytest.approx(0.02, rel=0.12)
-    assert not pa.structural
+    assert p.mode.f_n_Hz == pytest.approx(3200.0, rel=0.002)
+    assert pa.lines_on(0) == ()
 
 
 @pytest.mark.parametrize(("f", "kind", "k", "j"), [
@@ -351,9 +373,10 @@ def test_analyse_recording_per_channel_results_and_flags():
     clipped = np.clip(np.round(150 * good / 0.015) * 0.015, -491.52, 491.505)
     rec = _recording({"accel_1": good, "accel_2": gapped, "accel_3": np.full(n, 0.015),
                       "accel_4": clipped}, {"accel_2": v})
+    # rig_signal is a displacement (receptance) response whatever the channels' unit says
     res = analyse_recording(rec, nperseg=NPERSEG, mesh_frequency_Hz=F_MESH,
                             shaft_frequencies_Hz=(F_PINION, F_WHEEL),
-                            bands_Hz=[(2000.0, 4000.0)])
+                            bands_Hz=[(2000.0, 4000.0)], response="displacement")
     assert list(res.channels) == ["accel_1", "accel_2", "accel_3", "accel_4"]
     a1, a2, a3, a4 = (res[k] for k in res.channels)
     assert a1.quality.ok and a1.error is None

@@ -480,7 +480,10 @@ torque_Nm = 300.0
     run_row = rows(df, quantity="run").iloc[0]
     assert run_row.status == "flagged" and "speed_varies" in run_row.quality_flags
     line = format_summary(obs).splitlines()[1].split()
-    assert line[1] == "flagged" and line[3] == f"0/{len(modes)}" and line[4] == "-"
+    # no clean mode: the summary shows the lowest flagged one, marked (issue 17 item 7)
+    lowest = modes.sort_values("mode_index").groupby("channel").head(1).f_n_Hz.median()
+    assert line[1] == "flagged" and line[3] == f"0/{len(modes)}"
+    assert line[4] == f"{lowest:.1f}*"
     assert line[6] == "ramp"
 
 

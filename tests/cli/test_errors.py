@@ -293,7 +293,7 @@ def test_observe_without_the_speed_signal_warns_and_goes_on(inputs, capsys, tmp_
 
 
 def test_demo_into_a_file_instead_of_a_folder(inputs, capsys):
-    fails(capsys, ["demo", "-o", str(inputs["a_file"]), "--duration", "0.5"], "a_file")
+    fails(capsys, ["demo", "-o", str(inputs["a_file"]), "--duration", "2"], "a_file")
 
 
 @pytest.mark.parametrize("duration", ["0", "-1", "nan", "x"])

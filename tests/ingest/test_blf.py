@@ -16,9 +16,9 @@ from pathlib import Path
 import can
 import numpy as np
 import pytest
-from conftest import REALDATA
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from realdata_path import REALDATA
 
 from rigtools.errors import RecordingFormatError
 from rigtools.ingest.can import blf

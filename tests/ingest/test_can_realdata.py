@@ -27,7 +27,7 @@ import can
 import cantools
 import numpy as np
 import pytest
-from conftest import REALDATA
+from realdata_path import REALDATA
 
 from rigtools.errors import DbcError
 from rigtools.ingest.can.dbc import decode_signal, load_dbc, multiplex_mask

@@ -40,9 +40,9 @@ from cdr_paths import (
     lay_out,
     raw_writer,
 )
-from conftest import REALDATA
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from realdata_path import REALDATA
 
 from rigtools.demo.mcap_writer import imu_cdr_payloads, write_imu_cdr_mcap, write_imu_mcap
 from rigtools.ingest.layout import ChannelMapping, SlowSpec, UniformSpec

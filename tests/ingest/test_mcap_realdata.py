@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import REALDATA
+from realdata_path import REALDATA
 
 from rigtools.errors import NoDataError
 from rigtools.ingest import read

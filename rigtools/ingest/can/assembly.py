@@ -8,9 +8,15 @@ counted in the :class:`~rigtools.ingest.recording.IngestReport` under a reason:
 ``id_not_in_dbc``            identifier absent from the DBC
 ``message_not_in_layout``    in the DBC, but no channel or slow signal of the layout uses it
 ``dlc_shorter_than_dbc``     payload shorter than the DBC message length
-``duplicate_frame``          same sample counter as an earlier frame of the channel
+``duplicate_frame``          same sample counter as an earlier frame of the message
+``counter_outlier``          a sample counter that disagrees with both neighbouring frames
 
-(error and remote frames are counted by the readers, which see them first).
+(error and remote frames are counted by the readers, which see them first). A frame counts
+once whatever number of channels it feeds: a message that carries three channels and arrives
+twice is one ``duplicate_frame``, not three, and it is not counted ``decoded`` as well. The
+builder learns which message carries each channel (:meth:`~rigtools.ingest.builder.
+RecordingBuilder.note_carrier`), so the gaps its channels share are counted once in frames
+(:func:`rigtools.ingest.losses.loss_tally`).
 """
 
 from __future__ import annotations
@@ -24,6 +30,7 @@ import pandas as pd
 from rigtools.ingest.builder import MAX_CLOCK_POINTS, RecordingBuilder
 from rigtools.ingest.can.dbc import decode_signal, multiplex_mask, signal_raw
 from rigtools.ingest.can.frames import CanFrameBatch
+from rigtools.ingest.can.layout_hint import fast_message_warning
 from rigtools.ingest.layout import CanLayout, CanUniform
 from rigtools.ingest.recording import IngestReport
 from rigtools.ingest.timebase import unwrap_counter
@@ -120,16 +127,88 @@ def assemble_can(
                         vals = vals * s.spec.scale + s.spec.offset
                     slow_parts.setdefault((si, bus), []).append((t, vals))
 
-    uniform_buses = _buses_by_index(accs)
-    for (ui, bus), acc in accs.items():
-        name = _bus_name(acc.spec.spec.channel, bus, uniform_buses[ui], report)
-        _finish_uniform(acc, name, builder, report)
+    _finish_messages(accs, layout, set(slow_by_key), builder, report)
     slow_buses = _buses_by_index(slow_parts)
+    if layout.description.get("source") == "dbc-attributes":
+        _warn_fast_slow_messages(layout, slow_parts, slow_buses, report)
     for (si, bus), parts in slow_parts.items():
         s = layout.slow[si]
         name = _bus_name(s.spec.name, bus, slow_buses[si], report)
         for t, vals in parts:
             builder.add_slow(name, s.unit, t, vals)
+
+
+def _finish_messages(
+    accs: dict[tuple[int, int], _UniformAcc],
+    layout: CanLayout,
+    slow_keys: set[tuple[int, bool]],
+    builder: RecordingBuilder,
+    report: IngestReport,
+) -> None:
+    """Finish the uniform channels message by message; count each frame lost or dropped once.
+
+    The channels fed by one message on one bus received the same frames in the same order:
+    a frame one of them drops (a duplicate, a corrupted counter) is counted once for the
+    message, and taken off ``report.decoded`` unless the message also feeds slow signals.
+    """
+    uniform_buses = _buses_by_index(accs)
+    groups: dict[tuple[tuple[int, bool], int], list[tuple[int, int]]] = {}
+    for ui, bus in accs:
+        msg = layout.uniform[ui].message
+        groups.setdefault(((int(msg.frame_id), bool(msg.is_extended_frame)), bus),
+                          []).append((ui, bus))
+    for (key, bus), members in groups.items():
+        message = layout.uniform[members[0][0]].message
+        several_buses = any(len(uniform_buses[ui]) > 1 for ui, _ in members)
+        source = f"message {message.name!r}" + (f" on bus {bus}" if several_buses else "")
+        names = [_bus_name(accs[m].spec.spec.channel, bus, uniform_buses[m[0]], report)
+                 for m in members]
+        who = (f"channel {names[0]!r}" if len(names) == 1 else
+               f"{source} (channels {', '.join(map(repr, names))})")
+        duplicate: np.ndarray | None = None
+        outlier: np.ndarray | None = None
+        for m, name in zip(members, names, strict=True):
+            acc = accs[m]
+            builder.note_carrier(name, source, len(acc.spec.samples))
+            dup, out = _finish_uniform(acc, name, who, builder, report)
+            duplicate = _either(duplicate, dup)
+            outlier = _either(outlier, out)
+        n_dup = 0 if duplicate is None else int(np.count_nonzero(duplicate))
+        if outlier is not None and duplicate is not None:
+            outlier = outlier & ~duplicate
+        n_out = 0 if outlier is None else int(np.count_nonzero(outlier))
+        report.reject("duplicate_frame", n_dup, source)
+        report.reject("counter_outlier", n_out, source)
+        if key not in slow_keys:  # those frames contributed nothing
+            report.decoded -= n_dup + n_out
+
+
+def _warn_fast_slow_messages(
+    layout: CanLayout,
+    slow_parts: dict[tuple[int, int], list[tuple[np.ndarray, np.ndarray]]],
+    slow_buses: dict[int, set[int]],
+    report: IngestReport,
+) -> None:
+    """Warn about messages read as slow signals that arrive as fast as sampled channels."""
+    by_message: dict[tuple[str, int], dict[str, tuple[list[np.ndarray], list[np.ndarray]]]] = {}
+    for (si, bus), parts in slow_parts.items():
+        s = layout.slow[si]
+        signals = by_message.setdefault((s.message.name, bus), {})
+        signals[s.spec.name] = ([t for t, _ in parts], [v for _, v in parts])
+    for (message, bus), signals in by_message.items():
+        several = any(len(slow_buses[si]) > 1 for si, b in slow_parts
+                      if b == bus and layout.slow[si].message.name == message)
+        label = f"message {message!r}" + (f" on bus {bus}" if several else "")
+        text = fast_message_warning(label, signals, str(layout.description.get("dbc", "")))
+        if text is not None:
+            report.warn(text)
+
+
+def _either(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:
+    """Element-wise or of two masks over the same frames (None: no frame set)."""
+    if a is None or b is None or a.shape != b.shape:
+        return b if a is None else a
+    return a | b
 
 
 def _buses_by_index(d: Mapping[tuple[int, int], object]) -> dict[int, set[int]]:
@@ -195,11 +274,19 @@ def _fingerprints(raws: list[np.ndarray]) -> np.ndarray:
 
 
 def _finish_uniform(
-    acc: _UniformAcc, name: str, builder: RecordingBuilder, report: IngestReport
-) -> None:
+    acc: _UniformAcc, name: str, who: str, builder: RecordingBuilder, report: IngestReport
+) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Hand one channel's frames to the builder, placed by their counter.
+
+    ``who`` names the channel, or its message and channels when the message feeds several, in
+    the warnings. Returns the masks, over the channel's frames in arrival order, of the frames
+    dropped as duplicates and as corrupted counters (None when none is).
+    """
     u = acc.spec
+    duplicate: np.ndarray | None = None
+    outlier: np.ndarray | None = None
     if not acc.raws:
-        return
+        return duplicate, outlier
     k = len(u.samples)
     fs = u.spec.sample_rate_Hz
     frame_rate = fs / k
@@ -216,21 +303,21 @@ def _finish_uniform(
         un = unwrap_counter(counters, 1 << int(u.counter.length), stamps, frame_rate,
                             payload=_fingerprints(acc.raws))
         del counters
-        if un.n_duplicate:
-            report.reject("duplicate_frame", un.n_duplicate, f"channel {name!r}")
         if un.n_outlier:
-            report.reject("counter_outlier", un.n_outlier, f"channel {name!r}")
-            report.warn(f"channel {name!r}: {un.n_outlier} frame(s) carry a sample counter "
+            outlier = un.outlier
+            report.warn(f"{who}: {un.n_outlier} frame(s) carry a sample counter "
                         "that disagrees with both neighbouring frames (corrupted); dropped")
+        if un.n_duplicate:
+            duplicate = ~un.keep if outlier is None else ~un.keep & ~outlier
         if un.n_reordered:
-            report.warn(f"channel {name!r}: {un.n_reordered} frame(s) arrived out of order; "
+            report.warn(f"{who}: {un.n_reordered} frame(s) arrived out of order; "
                         "placed by their sample counter")
         if un.clock_jumps:
-            report.warn(f"channel {name!r}: the logger clock jumped {un.clock_jumps} time(s) "
+            report.warn(f"{who}: the logger clock jumped {un.clock_jumps} time(s) "
                         "while the sample counter ran on; the counter was kept")
         if un.restarts.size:
             report.warn(
-                f"channel {name!r}: sample counter restarted {un.restarts.size} time(s) "
+                f"{who}: sample counter restarted {un.restarts.size} time(s) "
                 f"(first at frame {int(un.restarts[0])} of the channel); "
                 "resynchronised from the logger clock"
             )
@@ -240,7 +327,7 @@ def _finish_uniform(
     else:
         ticks = np.round((stamps - stamps.min()) * frame_rate).astype(np.int64)
         keep = np.ones(ticks.size, bool)
-        report.warn(f"channel {name!r}: no sample counter; time base from logger stamps")
+        report.warn(f"{who}: no sample counter; time base from logger stamps")
     # The clock check needs only a sample of the stamps.
     pick = np.flatnonzero(keep)
     if pick.size > MAX_CLOCK_POINTS:
@@ -261,3 +348,4 @@ def _finish_uniform(
         builder.add_samples(name, u.unit, fs, t * k, raw, conversion=acc.conversion)
     raws.clear()
     builder.add_clock(name, clock_index, clock_stamps)
+    return duplicate, outlier

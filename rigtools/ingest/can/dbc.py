@@ -51,7 +51,7 @@ def load_dbc(path: str | Path, *, strict: bool = True) -> Any:
     """
     p = Path(path)
     if not p.is_file():
-        raise DbcError(p, None, "a DBC file", "no such file")
+        raise DbcError(p, None, "a DBC file", "a directory" if p.is_dir() else "no such file")
     try:
         return cantools.database.load_file(str(p), database_format="dbc", strict=strict)
     except Exception as exc:  # cantools raises ParseError, ValueError, KeyError, ...

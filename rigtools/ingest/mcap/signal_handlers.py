@@ -266,6 +266,8 @@ class ImuHandler(DecodingHandler):
             name = f"{topic}/linear_acceleration.{axis}"
             self.ctx.builder.add_samples(name, "m/s^2", rate, start, values,
                                          stamp_index=stamp_index, stamps_s=t)
+            # one message, one sample of each axis: a lost message is one gap of all three
+            self.ctx.builder.note_carrier(name, f"topic {topic!r}", 1)
             self.ctx.builder.add_other_clock(name, other_clock, other_index, other_s)
 
 
@@ -553,6 +555,8 @@ class MappedHandler(DecodingHandler):
             keep = counts > 0
             self.ctx.builder.add_samples(spec.channel, unit, rate, index, values,
                                          stamp_index=idx0[keep], stamps_s=t[keep])
+            if counts.size and bool(np.all(counts == 1)):  # one sample per message
+                self.ctx.builder.note_carrier(spec.channel, f"topic {self.channel.topic!r}", 1)
             self.ctx.builder.add_other_clock(spec.channel, other_clock, idx0[keep],
                                              t_other[keep])
 

@@ -1,0 +1,60 @@
+"""Bayesian calibration of backlash, thermal closure and stiffness from natural frequencies.
+
+Modules: ``priors`` (prior families, truncation), ``config`` (the ``[calibration]`` block and
+its defaults), ``data`` (observations table -> runs, conditions, candidate peaks), ``forward``
+(the three model variants of the mesh natural frequency, two thermal closures, the jammed
+state), ``likelihood`` (the mixture over candidate peaks with a background component),
+``kernel`` (the same log posterior compiled), ``model`` (the log posterior of a campaign),
+``checkpoint`` (crash-safe chain storage), ``sampler`` (MAP, emcee, convergence), ``derived``
+(critical gaps, margins, regimes, flip temperature, mesh mode), ``diagnostics`` (summaries,
+checks, identifiability), ``comparison`` (PSIS-LOO of the variants), ``result``, ``outputs``
+(``posterior.nc``, ``summary.json``, ``summary.csv``), ``api`` (:func:`calibrate`),
+``simulate`` (synthetic observation tables), ``curves`` (posterior predictive bands for the
+figures), ``plan`` (which runs to add), ``autocorr`` (integrated autocorrelation time),
+``errors``.
+"""
+
+from rigtools.calibration.api import CHECKPOINT_FILE, calibrate, resolve_reference
+from rigtools.calibration.comparison import ModelComparison, compare_variants
+from rigtools.calibration.config import (
+    PARAMETERS,
+    VARIANTS,
+    CalibrationConfig,
+    ParameterSpec,
+    Tolerances,
+    default_config,
+    parse_calibration_block,
+)
+from rigtools.calibration.curves import PredictiveCurves, predictive_curves
+from rigtools.calibration.errors import CalibrationError
+from rigtools.calibration.outputs import write_outputs
+from rigtools.calibration.plan import RunPlan, plan_next_runs
+from rigtools.calibration.priors import Prior, prior_from_mapping
+from rigtools.calibration.result import CalibrationResult, VariantFit
+from rigtools.calibration.simulate import simulate_observations
+
+__all__ = [
+    "CHECKPOINT_FILE",
+    "PARAMETERS",
+    "VARIANTS",
+    "CalibrationConfig",
+    "CalibrationError",
+    "CalibrationResult",
+    "ModelComparison",
+    "ParameterSpec",
+    "PredictiveCurves",
+    "Prior",
+    "RunPlan",
+    "Tolerances",
+    "VariantFit",
+    "calibrate",
+    "compare_variants",
+    "default_config",
+    "parse_calibration_block",
+    "plan_next_runs",
+    "predictive_curves",
+    "prior_from_mapping",
+    "resolve_reference",
+    "simulate_observations",
+    "write_outputs",
+]
