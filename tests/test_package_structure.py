@@ -214,6 +214,10 @@ def test_cycle_finder_finds_a_cycle() -> None:
         ("rigtools.plots", "rigtools.campaign"),
         ("rigtools.plots", "rigtools.cli"),
         ("rigtools.campaign", "rigtools.cli"),
+        ("rigtools.campaign", "rigtools.calibration"),
+        ("rigtools.analysis", "rigtools.calibration"),
+        ("rigtools.ingest", "rigtools.calibration"),
+        ("rigtools.calibration", "rigtools.cli"),
         ("rigtools.demo", "rigtools.cli"),
     ],
 )

@@ -34,8 +34,6 @@ from models.dynamics.dimensional import (
     DimensionalScaling,
     DimensionalSweep,
     dimensional_scaling,
-    disc_inertia,
-    equivalent_mass,
     to_dimensional,
 )
 from models.dynamics.integrate import (
@@ -161,8 +159,6 @@ __all__ = [
     "dead_zone",
     "dead_zone_potential",
     "dimensional_scaling",
-    "disc_inertia",
-    "equivalent_mass",
     "fvms_error_curve",
     "highest_frequency_bound",
     "hysteresis_band",

@@ -24,11 +24,12 @@ the error-free mean FVMS (2.99e8 N/m). ``omega_n`` -- hence the Hz and rpm of a 
 axis build them with ``reference_stiffness="fvms"`` (or a given ``k_0``). The
 ``damping_N_s_m`` follows the same ``k_0``.
 
-The
-gear inertias default to solid discs of the reference (pitch) diameter and the face width
-(``J = rho b pi r^4 / 2``, less a bore when the gear has one) -- the gear body alone; a test
-rig adds shafts and hubs, so pass measured ``J_1``, ``J_2`` when known (the natural frequency
-scales as ``1 / sqrt(m)``).
+The gear inertias default to the package's convention (:mod:`models.geometry.inertia`:
+operating-pitch discs of the face width less the bore, 0.3 of the reference radius when the
+gear states none) -- the gear body alone; a test rig adds shafts and hubs, so pass measured
+``J_1``, ``J_2`` when known (the natural frequency scales as ``1 / sqrt(m)``). Until this
+convention was shared the default here was the solid reference-radius disc, 6 % lighter on
+FZG-C; ``gear_inertia(pair, i, disc_radius="reference", bore_fraction=0)`` gives it back.
 
 References
 ----------
@@ -48,37 +49,14 @@ from models.dynamics.sweep import SweepResult
 from models.errors import ModelError
 from models.geometry import kinematics
 from models.geometry.gear_pair import GearPair
+from models.geometry.inertia import equivalent_mass, gear_inertia
 
 __all__ = [
     "DimensionalScaling",
     "DimensionalSweep",
     "dimensional_scaling",
-    "disc_inertia",
-    "equivalent_mass",
     "to_dimensional",
 ]
-
-
-def disc_inertia(pair: GearPair, gear: int) -> float:
-    """Polar moment of inertia of gear ``gear`` (1 pinion, 2 wheel) as a disc (kg m^2).
-
-    Outer radius the reference radius, width the face width, density from the gear's material,
-    minus the bore (``bore_diameter_m``) when given.
-    """
-    if gear not in (1, 2):
-        raise ModelError(f"`gear` must be 1 (pinion) or 2 (wheel), was {gear!r}")
-    g = pair.pinion if gear == 1 else pair.wheel
-    r = pair.reference_radius(gear)
-    r_i = 0.0 if g.bore_diameter_m is None else g.bore_diameter_m / 2
-    return g.material.density_kg_m3 * pair.face_width_m * math.pi * (r**4 - r_i**4) / 2
-
-
-def equivalent_mass(J1: float, J2: float, R1: float, R2: float) -> float:
-    """Seed 003 Eq. 24a: ``m = J1 J2 / (J1 R2^2 + J2 R1^2)`` (kg), base radii ``R_i`` (m)."""
-    for name, v in (("J1", J1), ("J2", J2), ("R1", R1), ("R2", R2)):
-        if not (math.isfinite(v) and v > 0):
-            raise ModelError(f"`{name}` must be finite and > 0, was {v!r}")
-    return J1 * J2 / (J1 * R2**2 + J2 * R1**2)
 
 
 @dataclass(frozen=True)
@@ -170,18 +148,20 @@ def dimensional_scaling(
         :func:`~models.dynamics.sdof.sdof_from_mesh_cycle`.
     pair : GearPair
     J1_kg_m2, J2_kg_m2 : float, optional
-        Polar inertias of pinion and wheel (kg m^2); default :func:`disc_inertia`.
+        Polar inertias of pinion and wheel (kg m^2); default
+        :func:`models.geometry.gear_inertia` (the package's convention).
 
     Examples
     --------
-    Two equal discs: ``m = J / (2 R^2)``.
+    Two equal gears: ``m = J / (2 R^2)``.
 
     >>> from models.geometry import load_gear_set
     >>> from models.dynamics import SDOFModel
     >>> g = load_gear_set("kahraman-blankenship").pair
     >>> s = dimensional_scaling(SDOFModel(0.02, 0.1, 1.0, mean_stiffness_N_m=3e8,
     ...                                   length_scale_m=68e-6), g)
-    >>> J = disc_inertia(g, 1)
+    >>> from models.geometry import gear_inertia
+    >>> J = gear_inertia(g, 1)
     >>> bool(np.isclose(s.mass_kg, J / (2 * g.base_radius(1) ** 2)))
     True
     >>> float(np.round(s.pinion_rpm(1.0) / 60 * 50 / s.natural_frequency_Hz, 12))
@@ -190,8 +170,8 @@ def dimensional_scaling(
     k0 = float(model.mean_stiffness_N_m)
     if not (math.isfinite(k0) and k0 > 0):
         raise ModelError(f"the model's `mean_stiffness_N_m` must be finite and > 0, was {k0!r}")
-    J1 = disc_inertia(pair, 1) if J1_kg_m2 is None else float(J1_kg_m2)
-    J2 = disc_inertia(pair, 2) if J2_kg_m2 is None else float(J2_kg_m2)
+    J1 = gear_inertia(pair, 1) if J1_kg_m2 is None else float(J1_kg_m2)
+    J2 = gear_inertia(pair, 2) if J2_kg_m2 is None else float(J2_kg_m2)
     m = equivalent_mass(J1, J2, pair.base_radius(1), pair.base_radius(2))
     wn = math.sqrt(k0 / m)
     return DimensionalScaling(

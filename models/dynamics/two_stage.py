@@ -73,9 +73,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from models.dynamics.checks import as_count
-from models.dynamics.dimensional import disc_inertia
 from models.dynamics.two_stage_kernels import rk4_system_periods
 from models.errors import ModelError
+from models.geometry.inertia import gear_inertia
 from models.stiffness.mesh_cycle import Harmonics
 
 __all__ = [
@@ -718,14 +718,14 @@ def six_state_from_gear_sets(
 ) -> SixStateSystem:
     """:class:`SixStateSystem` from two :class:`~models.geometry.GearSet` s (gears 1-2, 3-4).
 
-    Gear bodies as discs of the reference radius less the bore
-    (:func:`~models.dynamics.dimensional.disc_inertia`), base radii as lever arms, load torque
+    Gear bodies as the package's discs (:func:`models.geometry.gear_inertia`: operating pitch
+    radius less the bore), base radii as lever arms, load torque
     ``T_2 = T_1 (r_2 r_4)/(r_1 r_3)`` (static balance), mesh damping from the damping ratios
     of the rigid-shaft reduction, ``c_i = 2 zeta_i sqrt(k_i m_i)``.
     """
     p1, p2 = stage1_set.pair, stage2_set.pair
     r = (p1.base_radius(1), p1.base_radius(2), p2.base_radius(1), p2.base_radius(2))
-    J = (disc_inertia(p1, 1), disc_inertia(p1, 2), disc_inertia(p2, 1), disc_inertia(p2, 2))
+    J = (gear_inertia(p1, 1), gear_inertia(p1, 2), gear_inertia(p2, 1), gear_inertia(p2, 2))
     J23 = J[1] + J[2]
     m1 = 1.0 / (r[0] ** 2 / J[0] + r[1] ** 2 / J23)
     m3 = 1.0 / (r[2] ** 2 / J23 + r[3] ** 2 / J[3])
@@ -765,8 +765,9 @@ def two_stage_from_gear_sets(
     """Build the model from two :class:`~models.geometry.GearSet` s (gears 1-2 and 3-4).
 
     :func:`six_state_from_gear_sets` with a rigid intermediate shaft (seed 001's assumption),
-    reduced by :func:`rigid_shaft_model`: gear bodies as discs of the reference radius less the
-    bore (``J = pi rho w (r^4 - r_i^4) / 2``, face width of the pair), base radii as lever arms,
+    reduced by :func:`rigid_shaft_model`: gear bodies as the package's discs
+    (:func:`models.geometry.gear_inertia`: ``J = pi rho w (r_w^4 - r_i^4) / 2``, operating pitch
+    radius less the bore, face width of the pair), base radii as lever arms,
     load torque ``T_2 = T_1 (r_2 r_4)/(r_1 r_3)``. ``stiffness`` are normalised series
     (mean 1), ``error_m`` in metres, ``thermal`` normalised by the stage mean stiffness.
     Returns the model and a dict of the dimensional scales (``omega_n``, ``L``, ``m1``,

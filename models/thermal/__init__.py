@@ -18,6 +18,7 @@ frequency swept over torque and backlash at it, with the jammed torque ranges; d
 :mod:`rigtools.plots.thermal`), ``checks`` (the argument checks the modules share).
 """
 
+from models.geometry.inertia import equivalent_mass, gear_inertia
 from models.thermal.expansion import (
     DEFAULT_BORE_FRACTION,
     FlankDeformation,
@@ -47,8 +48,6 @@ from models.thermal.natural_frequency import (
     JammedModel,
     NaturalFrequency,
     NaturalFrequencyModel,
-    equivalent_mass,
-    gear_inertia,
     mesh_natural_frequency,
     mesh_natural_frequency_scalar,
     prepare_natural_frequency,

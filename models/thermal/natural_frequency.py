@@ -31,20 +31,12 @@ and ``omega^2 = k / m_e``. Shafts, couplings and the rest of the rig are left ou
 mode in which the two gear bodies swing against each other on the mesh (on an FZG rig the
 slender shafts decouple them from the rest of the loop at the frequencies of interest).
 
-The inertias (:func:`gear_inertia`), unless given: each gear is a bored disc of the face width
-``b``, density of its material, outer radius the **operating pitch radius**
-``r_w = r_b / cos(alpha')`` (default, ``disc_radius="operating"``) or the reference radius
-``z m / 2`` (``"reference"``), bore the gear's ``bore_diameter_m`` or, when the gear has none,
-0.3 of its reference diameter (the convention of
-:mod:`models.stiffness.potential_energy`):
-
-.. math:: J = \frac{\pi}{2} \rho\, b \left(r_o^4 - r_i^4\right) .
-
-The pitch-circle disc is the usual stand-in for a toothed body; a body solid to the root
-circle with a half-filled tooth ring root-to-tip comes out 7 % above it for the FZG-C pinion
-and 0.4 % below for the wheel. The reference-radius disc is 6.4 % below the operating one
-(FZG-C), i.e. 3 % in ``f_n``. A real test gear's hub, web or shaft shoulder changes ``J``
-more than that: give ``inertia_kg_m2`` when it is known.
+The inertias, unless given, follow the package's one convention,
+:mod:`models.geometry.inertia` (:data:`~models.geometry.inertia.EQUIVALENT_MASS_CONVENTION`):
+bored discs of the face width whose outer radius is the operating pitch radius (default) or
+the reference radius (``disc_radius="reference"``, 6.4 % lighter on FZG-C, 3 % in ``f_n``). A
+real test gear's hub, web or shaft shoulder changes ``J`` more than that: give
+``inertia_kg_m2`` when it is known.
 
 The mean mesh stiffness
 -----------------------
@@ -124,6 +116,7 @@ from numpy.typing import ArrayLike
 
 from models.errors import ModelError
 from models.geometry.gear_pair import GearPair
+from models.geometry.inertia import DiscRadius, equivalent_mass, gear_inertia
 from models.stiffness.ishikawa import HertzOption, tooth_pair_stiffness
 from models.stiffness.load_distribution import load_share_seed_000
 from models.thermal.checks import as_backlash, as_chi, as_closure, as_positive
@@ -138,8 +131,6 @@ __all__ = [
     "JammedModel",
     "NaturalFrequency",
     "NaturalFrequencyModel",
-    "equivalent_mass",
-    "gear_inertia",
     "mesh_natural_frequency",
     "mesh_natural_frequency_scalar",
     "prepare_natural_frequency",
@@ -148,94 +139,6 @@ __all__ = [
 JammedModel = Literal["nan", "double_flank"]
 #: Accepted values of ``jammed_model``.
 JAMMED_MODELS: Final[tuple[JammedModel, ...]] = ("nan", "double_flank")
-# Bore of a gear that states none, as a fraction of its reference diameter (the convention of
-# models.stiffness.potential_energy and models.thermal.expansion).
-_DEFAULT_BORE_FRACTION: Final[float] = 0.3
-
-
-# --- inertia -----------------------------------------------------------------------------
-def gear_inertia(
-    pair: GearPair, gear: int, *, disc_radius: Literal["operating", "reference"] = "operating"
-) -> float:
-    r"""Polar moment of inertia of gear 1 or 2 as a bored disc (kg m^2).
-
-    .. math:: J = \frac{\pi}{2} \rho\, b \left(r_o^4 - r_i^4\right)
-
-    Parameters
-    ----------
-    pair : GearPair
-        Face width ``b`` of the pair, density of the gear's material.
-    gear : {1, 2}
-        Pinion or wheel.
-    disc_radius : {"operating", "reference"}
-        ``r_o``: the operating pitch radius ``r_b / cos(alpha')`` (default) or the reference
-        radius ``z m / 2``.
-
-    Returns
-    -------
-    float
-        ``J`` (kg m^2). Bore ``r_i``: the gear's ``bore_diameter_m`` / 2, or
-        0.3 of the reference radius (a bore of 0.3 d, as elsewhere in ``models``).
-
-    Examples
-    --------
-    >>> from models.geometry import load_gear_set
-    >>> g = load_gear_set("fzg-c").pair
-    >>> round(gear_inertia(g, 1) * 1e4, 3)   # in 1e-4 kg m^2
-    3.07
-    """
-    if isinstance(gear, bool) or gear not in (1, 2):
-        raise ModelError(f"`gear` must be 1 (pinion) or 2 (wheel), was {gear!r}")
-    if disc_radius == "operating":
-        r_o = pair.operating_pitch_radius(gear)
-    elif disc_radius == "reference":
-        r_o = pair.reference_radius(gear)
-    else:
-        raise ModelError(f"`disc_radius` must be 'operating' or 'reference', was {disc_radius!r}")
-    g = pair.pinion if gear == 1 else pair.wheel
-    r_i = (g.bore_diameter_m / 2 if g.bore_diameter_m is not None
-           else _DEFAULT_BORE_FRACTION * pair.reference_radius(gear))
-    if not 0 <= r_i < r_o:
-        raise ModelError(f"`{'pinion' if gear == 1 else 'wheel'}.bore_diameter_m` must lie in "
-                         f"[0, {2 * r_o:.6g}) m, was {2 * r_i!r}")
-    return math.pi / 2 * g.material.density_kg_m3 * pair.face_width_m * (r_o**4 - r_i**4)
-
-
-def equivalent_mass(inertia_pinion_kg_m2: float, inertia_wheel_kg_m2: float,
-                    base_radius_pinion_m: float, base_radius_wheel_m: float) -> float:
-    r"""Equivalent mass of the mesh mode on the line of action (kg).
-
-    .. math:: m_e = \frac{J_1 J_2}{J_1 r_{b2}^2 + J_2 r_{b1}^2}
-
-    (derivation in the module notes).
-
-    Parameters
-    ----------
-    inertia_pinion_kg_m2, inertia_wheel_kg_m2 : float
-        ``J_1``, ``J_2`` (kg m^2), > 0.
-    base_radius_pinion_m, base_radius_wheel_m : float
-        ``r_b1``, ``r_b2`` (m), > 0.
-
-    Returns
-    -------
-    float
-        ``m_e`` (kg).
-
-    Examples
-    --------
-    Two equal gears: half of ``J / r_b^2``.
-
-    >>> round(equivalent_mass(2e-3, 2e-3, 0.05, 0.05), 12)
-    0.4
-    """
-    j1, j2, r1, r2 = (float(as_positive(n, v)) for n, v in (
-        ("inertia_pinion_kg_m2", inertia_pinion_kg_m2),
-        ("inertia_wheel_kg_m2", inertia_wheel_kg_m2),
-        ("base_radius_pinion_m", base_radius_pinion_m),
-        ("base_radius_wheel_m", base_radius_wheel_m)))
-    return j1 * j2 / (j1 * r2**2 + j2 * r1**2)
-
-
 # --- the prepared model ------------------------------------------------------------------
 def _frozen(a: ArrayLike) -> np.ndarray:
     out = np.array(a, dtype=float)
@@ -339,7 +242,7 @@ def prepare_natural_frequency(
     shear_coefficient: float = 1.0,
     anchor: Literal["form", "base"] = "form",
     nodes_per_zone: int = 8,
-    disc_radius: Literal["operating", "reference"] = "operating",
+    disc_radius: DiscRadius = "operating",
     inertia_kg_m2: tuple[float, float] | None = None,
     torque_Nm: ArrayLike | None = None,
 ) -> NaturalFrequencyModel:
@@ -361,7 +264,7 @@ def prepare_natural_frequency(
     nodes_per_zone : int
         Gauss-Legendre nodes on each zone A-B, B-D, D-E (>= 1).
     disc_radius : {"operating", "reference"}
-        Outer radius of the disc inertias (:func:`gear_inertia`); ignored when
+        Outer radius of the disc inertias (:func:`models.geometry.gear_inertia`); ignored when
         ``inertia_kg_m2`` is given.
     inertia_kg_m2 : (float, float), optional
         ``(J_1, J_2)`` (kg m^2), e.g. measured or from CAD.

@@ -8,13 +8,20 @@ state), ``likelihood`` (the mixture over candidate peaks with a background compo
 ``checkpoint`` (crash-safe chain storage), ``sampler`` (MAP, emcee, convergence), ``derived``
 (critical gaps, margins, regimes, flip temperature, mesh mode), ``diagnostics`` (summaries,
 checks, identifiability), ``comparison`` (PSIS-LOO of the variants), ``result``, ``outputs``
-(``posterior.nc``, ``summary.json``, ``summary.csv``), ``api`` (:func:`calibrate`),
+(``posterior.nc``, ``summary.json``, ``summary.csv``), ``api`` (:func:`calibrate_observations`),
 ``simulate`` (synthetic observation tables), ``curves`` (posterior predictive bands for the
-figures), ``plan`` (which runs to add), ``autocorr`` (integrated autocorrelation time),
-``errors``.
+figures), ``plan`` (which runs to add), ``campaign_inputs`` (:func:`calibrate` of a campaign:
+its pair, ``[calibration]`` and ``[thermal]`` blocks and observations), ``autocorr``
+(integrated autocorrelation time), ``errors``.
 """
 
-from rigtools.calibration.api import CHECKPOINT_FILE, calibrate, resolve_reference
+from rigtools.calibration.api import CHECKPOINT_FILE, calibrate_observations, resolve_reference
+from rigtools.calibration.campaign_inputs import (
+    calibrate,
+    campaign_config,
+    campaign_observations,
+    campaign_reference,
+)
 from rigtools.calibration.comparison import ModelComparison, compare_variants
 from rigtools.calibration.config import (
     PARAMETERS,
@@ -48,6 +55,10 @@ __all__ = [
     "Tolerances",
     "VariantFit",
     "calibrate",
+    "calibrate_observations",
+    "campaign_config",
+    "campaign_observations",
+    "campaign_reference",
     "compare_variants",
     "default_config",
     "parse_calibration_block",

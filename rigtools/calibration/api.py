@@ -1,11 +1,15 @@
-r"""``calibrate``: from a campaign's observations table to a posterior, with everything derived.
+r"""``calibrate_observations``: from an observations table to a posterior, everything derived.
+
+(:func:`rigtools.calibration.calibrate` takes a campaign and reads the pair, the
+``[calibration]`` block and the ``[thermal]`` reference from it, then comes here.)
 
 ::
 
     from models.geometry import load_gear_set
-    from rigtools.calibration import calibrate, parse_calibration_block, write_outputs
+    from rigtools.calibration import calibrate_observations, write_outputs
 
-    result = calibrate(observations, load_gear_set("fzg-c").pair, config, outdir="cal")
+    result = calibrate_observations(observations, load_gear_set("fzg-c").pair, config,
+                                    outdir="cal")
     result.summary["derived"]["critical_gap@90C"]      # mean, sd, q05, q50, q95, ess, r_hat
     result.summary["runs"]["LS9-90C"]["regime"]        # 'rises' | 'falls' | 'unchanged'
 
@@ -44,7 +48,7 @@ import arviz as az
 import numpy as np
 import pandas as pd
 
-from models.geometry import GearPair, load_gear_set
+from models.geometry import EQUIVALENT_MASS_CONVENTION, GearPair, load_gear_set
 from models.thermal import ThermalReference
 from rigtools.calibration.comparison import ModelComparison, compare_variants
 from rigtools.calibration.config import PARAMETERS, CalibrationConfig, Variant, default_config
@@ -69,7 +73,7 @@ from rigtools.calibration.sampler import (
     run_sampler,
 )
 
-__all__ = ["CHECKPOINT_FILE", "INFORMATIVE_NOTES", "calibrate", "resolve_reference"]
+__all__ = ["CHECKPOINT_FILE", "INFORMATIVE_NOTES", "calibrate_observations", "resolve_reference"]
 
 #: The chains' checkpoint file in OUTDIR.
 CHECKPOINT_FILE = "chains.h5"
@@ -250,6 +254,7 @@ def _summary(config: CalibrationConfig, data: CalibrationData, fits: dict[str, V
         "conventions": {
             "equivalent_mass_kg": fwd.equivalent_mass_kg,
             "equivalent_mass_basis": fwd.equivalent_mass_basis,
+            "equivalent_mass_convention": EQUIVALENT_MASS_CONVENTION,
             "k_EP_N_per_m": fwd.k_mesh_N_per_m,
             "reference_temperature_C": reference.reference_temperature_C,
             "housing": reference.housing,
@@ -292,7 +297,7 @@ def _summary(config: CalibrationConfig, data: CalibrationData, fits: dict[str, V
     }
 
 
-def calibrate(
+def calibrate_observations(
     observations: pd.DataFrame,
     pair: GearPair | str,
     config: CalibrationConfig | None = None,

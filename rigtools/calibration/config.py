@@ -80,9 +80,11 @@ Defaults, and why a test engineer can trust them on an FZG-type campaign
 * ``model_variant = "secant_path"`` (seed 000's model as ``models.thermal`` implements it) for
   the headline numbers, all three variants compared by PSIS-LOO.
 * ``jammed_model = "censored"``: see :mod:`rigtools.calibration.likelihood`.
-* Equivalent mass: one convention, ``models.thermal``'s discs of the operating pitch radius
-  with the gears' bores (0.3 d when none is stated); ``equivalent_mass_kg``,
-  ``inertia_kg_m2`` or ``disc_radius = "reference"`` override it.
+* Equivalent mass: the package's one convention (:mod:`models.geometry.inertia`): discs of the
+  operating pitch radius with the gears' bores (0.3 of the reference radius when none is
+  stated); ``equivalent_mass_kg``, ``inertia_kg_m2`` or ``disc_radius = "reference"`` override
+  it. Backlash, critical gaps and margins in micrometres scale with ``1 / m_e``: give measured
+  inertias when the gears carry hubs or shafts (:mod:`rigtools.calibration.derived`).
 * Sampler: 32 walkers (at least ``2 ndim + 2``), at most 20000 steps, convergence checked every
   100 steps, 8 MAP starts, seed 1.
 

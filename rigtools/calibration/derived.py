@@ -13,6 +13,13 @@ scale ``s``, temperature offsets):
     ``c - c*`` of the run, at its own closure (its logged temperature, plus its sampled
     offset when temperatures carry a measurement error). ``margin@<T>C`` at the operating
     temperature.
+``relative_margin@<run>`` (1)
+    ``(c - c*) / delta_el``: the run's margin in units of its mean elastic deflection
+    ``delta_el = F / (s k_m)`` (``F = T / r_b1``, ``k_m`` the cycle-mean ``k_EP``). It says how
+    far the run is from the jam in the measure the stiffness responds to: ``0`` is the critical
+    gap (the secant stiffness equals the elastic one at every load), ``-1`` the jam of the mesh
+    taken as a whole (``secant_mesh``; the path reading jams a little earlier, at the most
+    loaded node). Unlike ``margin@<run>`` it does not depend on the assumed equivalent mass.
 ``flip_temperature_C`` (degC)
     The bulk temperature at which ``c = c*(T)``: below it the stiffness rises with load, above
     it falls (seed 000 Table 5). Draws whose closure does not grow with temperature
@@ -34,9 +41,19 @@ temperature, under ``theta_ref -> theta_ref + d`` with ``c -> c - (1 - chi) kapp
 d``. So ``backlash``, ``critical_gap@*``, ``thermal_closure@*``, ``closure_coefficient`` and
 ``margin@*`` scale with ``1 / m_e`` (``stiffness_scale`` and ``mesh_stiffness_elastic`` with
 ``m_e``); ``backlash`` and ``critical_gap@*`` also shift with the reference temperature;
-``margin@*`` does not shift; the sign of every margin, ``p_c_lt_cstar``, the regimes and
-``flip_temperature_C`` are invariant to both. :data:`ROBUSTNESS` states it per quantity (written
-into ``summary.json``), and ``tests/calibration/test_robustness.py`` shows it on posteriors.
+``margin@*`` does not shift; the sign of every margin, ``p_c_lt_cstar``, the regimes,
+``flip_temperature_C`` and ``relative_margin@*`` are invariant to both.
+
+Why the margin in micrometres is not invariant to ``m_e``: the data are natural frequencies,
+``f_n^2 = k / m_e``, so a heavier assumed mass needs a stiffer mesh, ``s -> lambda s``; with the
+rig's stiffness inside Eq. (1) (the elastic deflection the free play adds to is ``F / (s k)``)
+the same frequencies then need the free play ``c - (1 - chi) Delta`` to shrink by the same
+``lambda``. Only ``s / m_e`` and the play times ``s`` are identified, so every length the
+calibration reports is "per assumed mass"; the margin over the elastic deflection is the length
+ratio the data fix. The regimes use ``unchanged_band_um`` in micrometres, so a run within a few
+percent of the band's edge can change regime with ``m_e``. :data:`ROBUSTNESS` states it per
+quantity (written into ``summary.json``), and ``tests/calibration/test_robustness.py`` shows it
+on posteriors.
 """
 
 from __future__ import annotations
@@ -71,6 +88,7 @@ ROBUSTNESS: Final[dict[str, dict[str, str]]] = {
                           "reference_temperature": "shifts"},
     "margin@*": {"equivalent_mass": "scales as 1/m_e (its sign is invariant)",
                  "reference_temperature": "invariant"},
+    "relative_margin@*": {"equivalent_mass": "invariant", "reference_temperature": "invariant"},
     "flip_temperature_C": {"equivalent_mass": "invariant", "reference_temperature": "invariant"},
     "mesh_stiffness_elastic": {"equivalent_mass": "scales as m_e",
                                "reference_temperature": "invariant"},
@@ -152,6 +170,12 @@ def derived_quantities(model: CalibrationModel, samples: np.ndarray, *,
     margins = run_margins_um(model, p)
     for r, run_id in enumerate(model.data.runs.run_id):
         out.append(Quantity(f"margin@{run_id}", "um", "derived", margins[..., r]))
+    # delta_el = F / (s k_m), in um
+    deflection_um = (model.forward.normal_load_N / model.forward.k_mesh_N_per_m / UM
+                     / p["stiffness_scale"][..., None])
+    for r, run_id in enumerate(model.data.runs.run_id):
+        out.append(Quantity(f"relative_margin@{run_id}", "1", "derived",
+                            margins[..., r] / deflection_um[..., r]))
     t_op = float(operating_temperature_C)
     out.append(Quantity(f"margin@{temperature_label(t_op)}", "um", "derived",
                         p["backlash"] - k1 * float(cl.at(t_op)) / UM))

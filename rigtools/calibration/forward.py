@@ -27,7 +27,7 @@ independent of backlash and closure (the data then say nothing about ``c`` and t
 coefficient; their posteriors are their priors). The jam is not modelled in this variant.
 
 In every variant ``f_n = sqrt(k / m_e) / (2 pi)``; ``m_e`` is the model's equivalent mass
-(operating-pitch discs with bores, :func:`models.thermal.gear_inertia`) unless the campaign
+(operating-pitch discs with bores, :mod:`models.geometry.inertia`) unless the campaign
 gives ``equivalent_mass_kg`` or the inertias, which enter as ``f -> f sqrt(m_model / m_e)``
 without re-preparing anything.
 
@@ -307,7 +307,7 @@ def prepare_forward(
     inertia_kg_m2 : (float, float), optional
         ``(J_1, J_2)`` (kg m^2) instead of the disc inertias.
     disc_radius : {"operating", "reference"}
-        Disc radius of the default inertias (:func:`models.thermal.gear_inertia`).
+        Disc radius of the default inertias (:func:`models.geometry.gear_inertia`).
 
     Returns
     -------

@@ -16,14 +16,10 @@ import sys
 from pathlib import Path
 from typing import Any
 
-import pandas as pd
-
-from models.thermal import ThermalReference
-from rigtools.campaign import Campaign, load_campaign
-from rigtools.campaign.thermal_reference import thermal_reference
+from rigtools.campaign import load_campaign
 from rigtools.cli.common import fail, one_line, output_problem
 
-__all__ = ["add_parser", "calibration_inputs", "campaign_reference", "format_verdict", "run"]
+__all__ = ["add_parser", "format_verdict", "run"]
 
 
 def add_parser(subparsers: Any) -> None:
@@ -45,36 +41,6 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("--seed", type=int, default=None,
                    help="random seed (default: the [calibration] block's, else 0)")
     p.set_defaults(func=run)
-
-
-def calibration_inputs(campaign: Campaign, observations: str | None, outdir: Path
-                       ) -> pd.DataFrame:
-    """The observations table: read from ``observations``, or made by observing ``campaign``."""
-    from rigtools.campaign.observation_files import read_observations, write_observations
-
-    if observations is not None:
-        return read_observations(observations)
-    from rigtools.campaign.observe import observe_campaign
-
-    obs = observe_campaign(campaign)
-    write_observations(obs, outdir / "observations.parquet")
-    return obs.table
-
-
-def campaign_reference(campaign: Campaign) -> ThermalReference | None:
-    """The campaign's ``[thermal]`` reference state for the calibration, None without one.
-
-    With ``housing = "follows-oil"`` the forward model places each run's housing at that run's
-    logged oil temperature (:mod:`rigtools.calibration.forward`); the reference is built at the
-    reference temperature only because the state needs an oil temperature to exist.
-    """
-    th = campaign.thermal
-    if th.reference_temperature_C is None:
-        return None
-    if th.housing == "follows-oil":
-        return ThermalReference(th.reference_temperature_C, "follows-oil",
-                                oil_temperature_C=th.reference_temperature_C)
-    return thermal_reference(campaign)
 
 
 def format_verdict(summary: dict[str, Any]) -> str:
@@ -115,7 +81,7 @@ def format_verdict(summary: dict[str, Any]) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Run the subcommand."""
-    from rigtools.calibration import calibrate, parse_calibration_block, write_outputs
+    from rigtools.calibration import calibrate, campaign_config, write_outputs
     from rigtools.plots.calibration import calibration_figures
 
     outdir = Path(args.output)
@@ -123,13 +89,10 @@ def run(args: argparse.Namespace) -> int:
     if problem:
         return fail(problem)
     campaign = load_campaign(args.campaign)
-    config = parse_calibration_block(campaign.calibration or {}, source=str(campaign.path),
-                                     line_of=campaign.line_of)
-    reference = campaign_reference(campaign)
+    config = campaign_config(campaign)          # a wrong block fails before any observing
     outdir.mkdir(parents=True, exist_ok=True)
-    table = calibration_inputs(campaign, args.observations, outdir)
-    result = calibrate(table, campaign.gear.pair, config, thermal_reference=reference,
-                       outdir=outdir, seed=args.seed)
+    result = calibrate(campaign, args.observations, config=config, outdir=outdir,
+                       seed=args.seed)
     written = write_outputs(result, outdir)
     logging.disable(logging.WARNING)  # corner logs "too few points" for every narrow panel
     try:

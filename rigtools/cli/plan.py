@@ -16,7 +16,6 @@ from typing import Any
 
 from rigtools.campaign import load_campaign
 from rigtools.cli.arguments import int_in_range
-from rigtools.cli.calibrate import calibration_inputs, campaign_reference
 from rigtools.cli.common import fail, output_problem
 
 __all__ = ["add_parser", "run"]
@@ -43,19 +42,16 @@ def add_parser(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the subcommand."""
-    from rigtools.calibration import calibrate, parse_calibration_block, plan_next_runs
+    from rigtools.calibration import calibrate, campaign_config, plan_next_runs
 
     outdir = Path(args.output)
     problem = output_problem(outdir, folder=True)
     if problem:
         return fail(problem)
     campaign = load_campaign(args.campaign)
-    config = parse_calibration_block(campaign.calibration or {}, source=str(campaign.path),
-                                     line_of=campaign.line_of)
+    config = campaign_config(campaign)
     outdir.mkdir(parents=True, exist_ok=True)
-    table = calibration_inputs(campaign, args.observations, outdir)
-    result = calibrate(table, campaign.gear.pair, config,
-                       thermal_reference=campaign_reference(campaign), outdir=outdir)
+    result = calibrate(campaign, args.observations, config=config, outdir=outdir)
     plan = plan_next_runs(result)  # the ranges come from the [calibration] block
     best = plan.best(args.number)
     if args.json:

@@ -78,7 +78,7 @@ from typing import Any, Final, Literal
 
 import numpy as np
 
-from models.geometry import GearPair, GearSet
+from models.geometry import EQUIVALENT_MASS_CONVENTION, GearPair, GearSet
 from models.thermal import (
     FALLS,
     RISES,
@@ -468,8 +468,7 @@ class CampaignTruth:
                 "jammed": r.mesh.jammed} for r in self.runs},
             "conventions": {
                 "equivalent_mass_kg": p.equivalent_mass_kg,
-                "equivalent_mass": "models.thermal.prepare_natural_frequency: discs of the "
-                                   "operating pitch radius with the gears' bores (0.3 d)",
+                "equivalent_mass": EQUIVALENT_MASS_CONVENTION,
                 "k_EP_N_per_m": p.k_EP_mean_N_per_m,
                 "stiffness_scale": "s multiplies k_EP inside Eq. (1): f_n = sqrt(s) "
                                    "f_n_model(T, s Delta, s c, chi)",

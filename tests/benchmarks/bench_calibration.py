@@ -34,7 +34,12 @@ import pytest
 
 from models.geometry import load_gear_set
 from models.thermal import ThermalReference
-from rigtools.calibration import calibrate, default_config, simulate_observations, write_outputs
+from rigtools.calibration import (
+    calibrate_observations,
+    default_config,
+    simulate_observations,
+    write_outputs,
+)
 from rigtools.calibration.data import prepare_data
 from rigtools.calibration.model import CalibrationModel, build_model
 from rigtools.calibration.sampler import SamplerSettings, find_map, run_sampler
@@ -104,15 +109,15 @@ def run(verbose: bool = True) -> dict[str, float]:
                                 TEMPERATURES_C, TRUTH, rng=np.random.default_rng(3),
                                 housing_modes_Hz=(4500.0,))
     cfg = replace(default_config(), compare_variants=())
-    calibrate(obs, pair, replace(cfg, max_steps=400))     # compile (or load) the kernel
+    calibrate_observations(obs, pair, replace(cfg, max_steps=400))   # compile (or load) kernel
     t0, c0 = time.perf_counter(), time.process_time()
-    res = calibrate(obs, pair, cfg)
+    res = calibrate_observations(obs, pair, cfg)
     total, cpu = time.perf_counter() - t0, time.process_time() - c0
     with tempfile.TemporaryDirectory() as tmp:
         t1 = time.perf_counter()
         write_outputs(res, Path(tmp))
         t_io = time.perf_counter() - t1
-    # the split, by the same steps as calibrate()
+    # the split, by the same steps as calibrate_observations()
     t1 = time.perf_counter()
     data = prepare_data(obs, cfg)
     model = build_model(data, pair, cfg, reference=ThermalReference(20.0))

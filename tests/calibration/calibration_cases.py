@@ -19,7 +19,7 @@ import pytest
 from models.geometry import GearPair, load_gear_set
 from rigtools.calibration import (
     CalibrationConfig,
-    calibrate,
+    calibrate_observations,
     default_config,
     simulate_observations,
 )
@@ -47,7 +47,7 @@ def secant_fit(pair: GearPair, tmp_path_factory: pytest.TempPathFactory) -> tupl
     Campaign seed 6, the headline variant compared with the tangent reading.
     """
     out = tmp_path_factory.mktemp("cal")
-    res = calibrate(campaign(pair, seed=6), pair,
+    res = calibrate_observations(campaign(pair, seed=6), pair,
                     fast_config(compare_variants=("secant_path", "tangent")), outdir=out)
     return res, out
 

@@ -40,7 +40,7 @@ import numpy as np
 from scipy import stats
 
 from models.geometry import load_gear_set
-from rigtools.calibration import CalibrationError, calibrate, default_config
+from rigtools.calibration import CalibrationError, calibrate_observations, default_config
 from rigtools.calibration.simulate import simulate_observations
 
 TORQUES_NM = (20.0, 50.0, 100.0, 183.4, 302.0) * 2
@@ -82,7 +82,7 @@ def one(args: tuple[int, int, Settings]) -> dict[str, Any]:
             "margin@90C": truth["backlash"] - c_star}
     t0 = time.perf_counter()
     try:
-        res = calibrate(obs, pair, cfg)
+        res = calibrate_observations(obs, pair, cfg)
     except CalibrationError as exc:
         return {"i": i, "refused": str(exc), "truth": truth}
     out: dict[str, Any] = {"i": i, "truth": truth, "seconds": time.perf_counter() - t0,

@@ -7,7 +7,7 @@ import pytest
 from calibration_cases import campaign, fast_config
 
 from models.geometry import GearPair
-from rigtools.calibration import CalibrationError, calibrate, parse_calibration_block
+from rigtools.calibration import CalibrationError, calibrate_observations, parse_calibration_block
 from rigtools.errors import RigtoolsError
 
 
@@ -23,7 +23,7 @@ def test_left_out_runs_are_listed_in_the_summary(pair: GearPair) -> None:
         ["failed", "r1.blf: cut at byte 12"]
     obs.loc[obs["run_id"] == "R2", "bulk_temperature_C"] = np.nan
     obs = obs[~((obs["run_id"] == "R3") & (obs["quantity"] == "natural_frequency"))]
-    res = calibrate(obs, pair, fast_config())
+    res = calibrate_observations(obs, pair, fast_config())
     runs = res.summary["runs"]
     assert runs["R1"]["left_out"] == \
         "the run failed in the observations stage: r1.blf: cut at byte 12"
@@ -36,7 +36,7 @@ def test_left_out_runs_are_listed_in_the_summary(pair: GearPair) -> None:
 
 def test_one_temperature_warns_of_the_degeneracy(pair: GearPair) -> None:
     obs = campaign(pair, temperatures=(90.0,) * 10)
-    res = calibrate(obs, pair, fast_config(max_steps=2000))
+    res = calibrate_observations(obs, pair, fast_config(max_steps=2000))
     assert any(w.startswith("all runs at one bulk temperature (90 degC): the backlash and the "
                             "closure coefficient are degenerate") for w in res.warnings)
 
@@ -45,7 +45,7 @@ def test_priors_that_exclude_the_data_name_the_key(pair: GearPair) -> None:
     cfg = _cfg({"stiffness_scale": {"dist": "uniform", "lower": 6.0, "upper": 8.0}})
     with pytest.raises(CalibrationError, match=r"^calibration.priors.stiffness_scale: the "
                        r"priors exclude the data") as info:
-        calibrate(campaign(pair), pair, cfg)
+        calibrate_observations(campaign(pair), pair, cfg)
     assert isinstance(info.value, RigtoolsError)
 
 
@@ -54,18 +54,18 @@ def test_a_campaign_whose_runs_all_jam_names_the_key(pair: GearPair) -> None:
                 "closure_coefficient": {"dist": "uniform", "lower": 3.0, "upper": 3.5}})
     with pytest.raises(CalibrationError, match=r"^calibration.priors.backlash: every run "
                        r"\(R0, R1, .*\) is jammed by thermal growth"):
-        calibrate(campaign(pair), pair, cfg)
+        calibrate_observations(campaign(pair), pair, cfg)
 
 
 def test_too_few_walkers_name_the_key(pair: GearPair) -> None:
     cfg = _cfg({}, walkers=4)
     with pytest.raises(CalibrationError, match=r"^calibration.walkers: 4 walkers for 4 free "
                        r"parameters"):
-        calibrate(campaign(pair), pair, cfg)
+        calibrate_observations(campaign(pair), pair, cfg)
 
 
 def test_nothing_usable_names_every_run(pair: GearPair) -> None:
     obs = campaign(pair).copy()
     obs["torque_Nm"] = np.nan
     with pytest.raises(CalibrationError, match=r"R0: torque_Nm is missing or NaN; R1"):
-        calibrate(obs, pair, fast_config())
+        calibrate_observations(obs, pair, fast_config())

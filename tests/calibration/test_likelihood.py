@@ -11,7 +11,7 @@ from scipy import stats
 
 from models.geometry import GearPair
 from models.thermal import SEED_000_CHI, ThermalReference
-from rigtools.calibration import calibrate
+from rigtools.calibration import calibrate_observations
 from rigtools.calibration.data import Candidates, prepare_data
 from rigtools.calibration.likelihood import (
     LikelihoodSettings,
@@ -125,7 +125,7 @@ def test_a_taller_load_independent_mode_does_not_fool_the_fit(pair: GearPair,
     nf = obs[obs["quantity"] == "natural_frequency"]
     tallest = nf.loc[nf.groupby(["run_id", "channel"])["prominence_dB"].idxmax()]
     assert np.allclose(tallest["f_n_Hz"], HOUSING_HZ, rtol=0.02), "the setup must be hostile"
-    res = calibrate(obs, pair, fast_config())
+    res = calibrate_observations(obs, pair, fast_config())
     for run_id, s in res.summary["runs"].items():
         rows = nf[nf["run_id"] == run_id]
         mesh = rows[rows["truth_is_mesh"].astype(bool)]

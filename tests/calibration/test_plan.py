@@ -7,7 +7,7 @@ import pytest
 from calibration_cases import campaign, fast_config
 
 from models.geometry import GearPair
-from rigtools.calibration import calibrate
+from rigtools.calibration import calibrate_observations
 from rigtools.calibration.plan import plan_next_runs
 
 
@@ -15,7 +15,8 @@ from rigtools.calibration.plan import plan_next_runs
 def one_temperature(pair: GearPair) -> object:
     obs = campaign(pair, seed=10, torques=(20.0, 50.0, 100.0, 183.4, 302.0),
                    temperatures=(40.0,) * 5, run_ids=[f"R{i}" for i in range(5)])
-    return calibrate(obs, pair, fast_config(operating_temperature_C=90.0, max_steps=4000))
+    return calibrate_observations(obs, pair,
+                                  fast_config(operating_temperature_C=90.0, max_steps=4000))
 
 
 def test_a_one_temperature_campaign_is_told_to_run_at_another_temperature(

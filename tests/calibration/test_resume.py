@@ -15,7 +15,7 @@ import pytest
 from calibration_cases import campaign, fast_config
 
 from models.geometry import GearPair
-from rigtools.calibration import calibrate
+from rigtools.calibration import calibrate_observations
 
 HERE = Path(__file__).resolve().parent
 SETTINGS = {"walkers": 16, "max_steps": 900, "check_every": 50, "map_starts": 2}
@@ -38,15 +38,15 @@ def _same(a: object, b: object) -> None:
 def test_interrupted_in_process_resumes_bit_for_bit(pair: GearPair, tmp_path: Path) -> None:
     obs = campaign(pair, seed=5)
     cfg = fast_config(**SETTINGS)
-    whole = calibrate(obs, pair, cfg, outdir=tmp_path / "whole")
+    whole = calibrate_observations(obs, pair, cfg, outdir=tmp_path / "whole")
 
     def stop(step: int, max_steps: int, tau: float | None) -> None:
         if step >= 400:
             raise InterruptError
 
     with pytest.raises(InterruptError):
-        calibrate(obs, pair, cfg, outdir=tmp_path / "cut", progress=stop)
-    again = calibrate(obs, pair, cfg, outdir=tmp_path / "cut")
+        calibrate_observations(obs, pair, cfg, outdir=tmp_path / "cut", progress=stop)
+    again = calibrate_observations(obs, pair, cfg, outdir=tmp_path / "cut")
     assert again.headline.run.resumed_from == 400
     assert whole.headline.run.resumed_from == 0
     _same(whole, again)
@@ -55,8 +55,9 @@ def test_interrupted_in_process_resumes_bit_for_bit(pair: GearPair, tmp_path: Pa
 def test_a_changed_configuration_does_not_resume(pair: GearPair, tmp_path: Path) -> None:
     obs = campaign(pair, seed=5)
     short = SETTINGS | {"max_steps": 100}
-    calibrate(obs, pair, fast_config(**short), outdir=tmp_path)
-    other = calibrate(obs, pair, fast_config(**(short | {"seed": 2})), outdir=tmp_path)
+    calibrate_observations(obs, pair, fast_config(**short), outdir=tmp_path)
+    other = calibrate_observations(obs, pair, fast_config(**(short | {"seed": 2})),
+                                   outdir=tmp_path)
     assert other.headline.run.resumed_from == 0
     assert any("belongs to another configuration" in w for w in other.headline.run.notes)
 
@@ -66,14 +67,14 @@ SCRIPT = textwrap.dedent("""
     sys.path.insert(0, {here!r})
     from calibration_cases import campaign, fast_config
     from models.geometry import load_gear_set
-    from rigtools.calibration import calibrate
+    from rigtools.calibration import calibrate_observations
     pair = load_gear_set("fzg-c").pair
 
     def progress(step, max_steps, tau):
         print(step, flush=True)
 
-    calibrate(campaign(pair, seed=5), pair, fast_config(**{settings!r}), outdir={out!r},
-              progress=progress)
+    calibrate_observations(campaign(pair, seed=5), pair, fast_config(**{settings!r}),
+                           outdir={out!r}, progress=progress)
     print("done", flush=True)
 """)
 
@@ -97,9 +98,9 @@ def test_sigkill_mid_run_then_restart_gives_the_same_numbers(pair: GearPair,
     assert not (out / "summary.json").exists()
     obs = campaign(pair, seed=5)
     cfg = fast_config(**SETTINGS)
-    resumed = calibrate(obs, pair, cfg, outdir=out)
+    resumed = calibrate_observations(obs, pair, cfg, outdir=out)
     assert resumed.headline.run.resumed_from >= 350
-    whole = calibrate(obs, pair, cfg, outdir=tmp_path / "whole")
+    whole = calibrate_observations(obs, pair, cfg, outdir=tmp_path / "whole")
     _same(whole, resumed)
     a = json.loads((out / "summary.json").read_text())
     b = json.loads((tmp_path / "whole" / "summary.json").read_text())

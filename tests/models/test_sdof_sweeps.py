@@ -24,18 +24,13 @@ from models.dynamics import (
     steady_state,
     sweep,
 )
-from models.dynamics.dimensional import (
-    dimensional_scaling,
-    disc_inertia,
-    equivalent_mass,
-    to_dimensional,
-)
+from models.dynamics.dimensional import dimensional_scaling, to_dimensional
 from models.dynamics.integrate import POINCARE_POINTS, settle_periodic
 from models.dynamics.itms import itms_from_mesh_cycle
 from models.dynamics.parallel import sweep_many
 from models.dynamics.sdof import PeriodicCurve
 from models.errors import ModelError
-from models.geometry import load_gear_set
+from models.geometry import equivalent_mass, gear_inertia, load_gear_set
 from models.stiffness import mesh_cycle, pair_compliance, tabulate_compliance
 from models.stiffness.mesh_cycle import Harmonics
 
@@ -216,10 +211,14 @@ def test_dimensional_scaling_by_hand(compliance):
     cyc = mesh_cycle(PAIR, compliance, 340.0, n_phases=120)
     m = sdof_from_mesh_cycle(cyc, "vvms", zeta=0.02, backlash_m=HALF_BACKLASH_M)
     s = dimensional_scaling(m, PAIR)
-    r = PAIR.reference_radius(1)
-    J = 7850.0 * PAIR.face_width_m * math.pi * r**4 / 2  # solid steel disc, Table 3 gears
-    assert disc_inertia(PAIR, 1) == pytest.approx(J, rel=1e-12)
+    # the package's convention (models.geometry.inertia), by hand: a steel disc out to the
+    # operating pitch radius r_w = r_b a / (r_b1 + r_b2) (cos alpha' = (r_b1 + r_b2) / a), bore
+    # 0.3 of the reference radius (Table 3 gears state none)
     rb = PAIR.base_radius(1)
+    r_w = rb * PAIR.centre_distance / (rb + PAIR.base_radius(2))
+    r_i = 0.3 * PAIR.reference_radius(1)
+    J = 7850.0 * PAIR.face_width_m * math.pi * (r_w**4 - r_i**4) / 2
+    assert gear_inertia(PAIR, 1) == pytest.approx(J, rel=1e-12)
     assert s.mass_kg == pytest.approx(J / (2 * rb**2), rel=1e-12)  # Eq. 24a, equal gears
     assert s.omega_n_rad_s == pytest.approx(math.sqrt(m.mean_stiffness_N_m / s.mass_kg))
     assert s.damping_N_s_m == pytest.approx(2 * 0.02 * s.mass_kg * s.omega_n_rad_s)
@@ -242,10 +241,10 @@ def test_dimensional_scaling_by_hand(compliance):
     np.testing.assert_allclose(d.arms_um, r.arms * 68.0)
     np.testing.assert_allclose(d.amplitudes_um, r.amplitudes * 68.0)
     np.testing.assert_allclose(d.mesh_frequency_Hz, s.mesh_frequency_Hz([0.8, 1.2]))
-    with pytest.raises(ModelError, match="J1"):
+    with pytest.raises(ModelError, match="inertia_pinion_kg_m2"):
         equivalent_mass(0.0, 1.0, 0.1, 0.1)
     with pytest.raises(ModelError, match="gear"):
-        disc_inertia(PAIR, 3)
+        gear_inertia(PAIR, 3)
 
 
 def test_secant_mean_stiffness_holds_the_profile_errors(compliance):

@@ -81,23 +81,29 @@ def test_map_point_equals_steady_response(direction):
 def test_frequency_scale_from_gear_data():
     """Lambda = 2 pi f / omega_n, omega_n = sqrt(k_1 / m_1), from the gear data by hand.
 
-    Gears as steel discs of the reference radius (m z / 2) less the bore, face width of the
-    pair: J = pi rho b (r^4 - r_i^4) / 2; 1/m_1 = r_b1^2 / J_1 + r_b2^2 / (J_2 + J_3).
+    Gears as the package's discs (models.geometry.inertia), written out: steel discs of the
+    operating pitch radius r_w = r_b a' / (r_b1 + r_b2) less the bore (0.3 of the reference
+    radius m z / 2 when the gear states none), face width of the pair:
+    J = pi rho b (r_w^4 - r_i^4) / 2; 1/m_1 = r_b1^2 / J_1 + r_b2^2 / (J_2 + J_3).
     """
     m = peak_dte_map(F_HZ[:2], T_C[:1], **FAST)
     js, rb = [], []
     for name in ("two-stage-45-steel", "two-stage-45-steel-stage2"):
         pair = load_gear_set(name).pair
-        for g in (pair.pinion, pair.wheel):
-            r = pair.module_m * g.teeth / 2  # seed 001: m = 3 mm, alpha = 20 deg
-            ri = 0.0 if g.bore_diameter_m is None else g.bore_diameter_m / 2
-            js.append(math.pi * g.material.density_kg_m3 * pair.face_width_m * (r**4 - ri**4) / 2)
-            rb.append(r * math.cos(math.radians(20.0)))
+        rbs = [pair.module_m * g.teeth / 2 * math.cos(math.radians(20.0))   # seed 001: m = 3 mm
+               for g in (pair.pinion, pair.wheel)]
+        for g, r_b in zip((pair.pinion, pair.wheel), rbs, strict=True):
+            r_w = r_b * pair.centre_distance / sum(rbs)
+            ri = (0.3 * pair.module_m * g.teeth / 2 if g.bore_diameter_m is None
+                  else g.bore_diameter_m / 2)
+            js.append(math.pi * g.material.density_kg_m3 * pair.face_width_m
+                      * (r_w**4 - ri**4) / 2)
+            rb.append(r_b)
     m1 = 1.0 / (rb[0] ** 2 / js[0] + rb[1] ** 2 / (js[1] + js[2]))
     wn = math.sqrt(1.9e9 / m1)
     np.testing.assert_allclose(m.frequency_ratio, 2 * math.pi * F_HZ[:2] / wn, rtol=1e-9)
     assert m.natural_frequency_Hz == pytest.approx(wn / (2 * math.pi), rel=1e-9)
-    # the modes of the coupled system differ from this scale (4.71 kHz): 2.2 and 5.8 kHz
+    # the modes of the coupled system differ from this scale (4.73 kHz): 2.2 and 5.8 kHz
     modes = m.mode_frequency_Hz[0, 0]
     assert modes[0] < 0.6 * m.natural_frequency_Hz < m.natural_frequency_Hz < modes[1]
 
