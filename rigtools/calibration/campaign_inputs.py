@@ -24,7 +24,7 @@ from rigtools.calibration.config import CalibrationConfig, parse_calibration_blo
 from rigtools.calibration.result import CalibrationResult
 from rigtools.campaign.manifest import Campaign, load_campaign
 from rigtools.campaign.observation_table import Observations
-from rigtools.campaign.thermal_reference import thermal_reference
+from rigtools.campaign.thermal_state import thermal_reference
 
 __all__ = ["ObservationsInput", "calibrate", "campaign_config", "campaign_observations",
            "campaign_reference"]

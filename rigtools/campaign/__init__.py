@@ -6,7 +6,7 @@ package reads it and turns it into the one tidy table the later stages read:
 
 - :mod:`~rigtools.campaign.manifest`: :func:`load_campaign` validates the file once, at the
   boundary, into a :class:`Campaign` (contract: ``data_schemas/campaign.schema.json``);
-- :mod:`~rigtools.campaign.thermal_reference`: :func:`thermal_reference`, the ``[thermal]``
+- :mod:`~rigtools.campaign.thermal_state`: :func:`thermal_reference`, the ``[thermal]``
   block as :mod:`models.thermal`'s reference state;
 - :mod:`~rigtools.campaign.observe`: :func:`observe_campaign` reads and analyses every run
   (:mod:`rigtools.ingest`, :mod:`rigtools.analysis`) into :class:`Observations`;
@@ -48,7 +48,7 @@ from rigtools.errors import CampaignError
 
 if TYPE_CHECKING:
     from rigtools.campaign.observe import observe_campaign, observe_run
-    from rigtools.campaign.thermal_reference import thermal_reference
+    from rigtools.campaign.thermal_state import thermal_reference
 
 __all__ = [
     "CONDITION_KEYS",
@@ -76,7 +76,7 @@ __all__ = [
 _ON_FIRST_USE = {
     "observe_campaign": "rigtools.campaign.observe",
     "observe_run": "rigtools.campaign.observe",
-    "thermal_reference": "rigtools.campaign.thermal_reference",
+    "thermal_reference": "rigtools.campaign.thermal_state",
 }
 
 

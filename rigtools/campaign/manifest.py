@@ -117,7 +117,7 @@ class Thermal:
     line : int or None
         Line of the ``[thermal]`` header in the campaign file (None when absent).
 
-    :func:`rigtools.campaign.thermal_reference` turns it into the reference state of
+    :func:`rigtools.campaign.thermal_state` turns it into the reference state of
     :mod:`models.thermal`.
     """
 
