@@ -24,8 +24,10 @@ r"""The files of a calibration: ``posterior.nc``, ``summary.json``, ``summary.cs
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
+import os
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any, Final
@@ -146,21 +148,34 @@ def _cell(v: Any) -> str:
     return str(v)
 
 
+def _replace_atomically(path: Path, text: str) -> None:
+    """Write ``text`` to a temporary file beside ``path``, fsync it, then rename it over."""
+    tmp = path.with_name(f"{path.name}.tmp-{os.getpid()}")
+    try:
+        with open(tmp, "w", newline="", encoding="utf-8") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
 def write_summary_csv(result: CalibrationResult, path: Path) -> None:
-    """``summary.csv`` (module notes)."""
-    with open(path, "w", newline="", encoding="utf-8") as fh:
-        w = csv.writer(fh)
-        w.writerow(CSV_COLUMNS)
-        for kind in ("parameters", "derived"):
-            for name, s in result.summary[kind].items():
-                w.writerow([name, kind[:-1] if kind == "parameters" else kind, s["unit"],
-                            *(_cell(s[c]) for c in CSV_COLUMNS[3:])])
+    """``summary.csv`` (module notes), written atomically."""
+    buf = io.StringIO(newline="")
+    w = csv.writer(buf)
+    w.writerow(CSV_COLUMNS)
+    for kind in ("parameters", "derived"):
+        for name, s in result.summary[kind].items():
+            w.writerow([name, kind[:-1] if kind == "parameters" else kind, s["unit"],
+                        *(_cell(s[c]) for c in CSV_COLUMNS[3:])])
+    _replace_atomically(path, buf.getvalue())
 
 
 def write_summary_json(result: CalibrationResult, path: Path) -> None:
-    """``summary.json`` (module notes)."""
-    path.write_text(json.dumps(result.summary, indent=2, allow_nan=False) + "\n",
-                    encoding="utf-8")
+    """``summary.json`` (module notes), written atomically."""
+    _replace_atomically(path, json.dumps(result.summary, indent=2, allow_nan=False) + "\n")
 
 
 def write_outputs(result: CalibrationResult, outdir: str | Path) -> dict[str, Path]:
@@ -183,9 +198,14 @@ def write_outputs(result: CalibrationResult, outdir: str | Path) -> dict[str, Pa
              "summary_csv": out / "summary.csv"}
     idata = inference_data(result.headline, config=result.config.to_dict(),
                            seed=result.config.seed)
-    tmp = paths["posterior"].with_suffix(".nc.partial")
-    idata.to_netcdf(str(tmp), engine="h5netcdf")
-    tmp.replace(paths["posterior"])
+    tmp = paths["posterior"].with_name(f"posterior.nc.tmp-{os.getpid()}")
+    try:
+        idata.to_netcdf(str(tmp), engine="h5netcdf")
+        with open(tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, paths["posterior"])
+    finally:
+        tmp.unlink(missing_ok=True)
     write_summary_json(result, paths["summary_json"])
     write_summary_csv(result, paths["summary_csv"])
     return paths

@@ -7,9 +7,12 @@ conditions as the engineer logged them::
     [campaign]
     name = "FZG-C backlash study"
     gear_set = "fzg-c"                      # a shipped gear set, or a path to the user's own
+    conditions = "runs.csv"                 # optional sheet of run conditions (see below)
 
-    [sensors]
+    [sensors]                               # the campaign's default logger layout
     dbc = "rig.dbc"                         # CAN logs; MCAP needs no DBC
+    map = "rig-map.toml"                    # channel mapping (optional)
+    format = "blf"                          # force a reader (default: detected by content)
     accel = ["accel_1", "accel_2"]          # default: every uniform channel
     speed = "PinionSpeed_rpm"               # slow signal or tacho channel: enables Arms per step
 
@@ -20,19 +23,44 @@ conditions as the engineer logged them::
     [analysis]                              # all optional
     nperseg = 4096
 
+    [report]                                # all optional: the validation report
+    title = "FZG-C backlash study, rig 2"
+    f_n_rel_tolerance = 0.02                # |measured mesh mode - predicted| / predicted
+    f_n_z_tolerance = 3.0                   # |measured - predicted| / predictive sd
+    backlash_range_um = [5.0, 40.0]         # pass when the 90 % interval of c lies inside
+    min_margin_um = 0.0                     # pass when q05 of the margin is at least this
+
     [[run]]
     id = "LS9-90C"
-    file = "runs/ls9_90c.mcap"              # relative to this file
+    file = "runs/ls9_90c.blf"               # relative to this file
     torque_Nm = 302.0                       # or the name of a torque slow signal
     bulk_temperature_C = 90.0
     speed_rpm = 1500.0                      # pinion speed
 
+    [[run]]                                 # another logger: overrides of [sensors]
+    id = "mcap-{stem}"                      # {stem}: the stem of each matching file
+    file = "mcap/ls9_*.mcap"                # a glob: one run per matching file, sorted
+    dbc = ""                                # "" drops the campaign's DBC / mapping
+    map = ""
+    format = "mcap"
+    accel = ["imu/accel_x", "imu/accel_y"]
+
+Each ``[[run]]`` may override ``dbc``, ``map``, ``format`` and ``accel`` of ``[sensors]``
+(:meth:`Campaign.sensors_for` gives a run's effective sensors), so recordings of several loggers
+sit in one campaign. A ``file`` holding ``*``, ``?`` or ``[`` is a glob
+(:mod:`rigtools.campaign.run_files`): one run per matching file, with the id the ``[[run]]``
+gives with ``{stem}`` replaced by the file's stem (``<id>-<stem>`` when it holds none); a
+pattern that matches nothing is an error. ``[campaign] conditions`` names a CSV sheet
+(:mod:`rigtools.campaign.conditions_sheet`) whose values fill the conditions a ``[[run]]``
+does not give; a run and the sheet giving different values is an error naming both.
+
 The contract is ``data_schemas/campaign.schema.json``. :func:`load_campaign` validates the
 file once, at the boundary: a key or value the schema does not allow, a duplicate run id, a
-gear set, DBC or mapping that cannot be found, or a non-finite number raises
-:class:`CampaignError` naming the file, the key and its line. Run files are *not* required to
-exist at load time: a missing recording is a failed run of the campaign (the observations stage
-records it and goes on with the others), not a broken manifest.
+gear set, DBC, mapping or conditions sheet that cannot be found, an unknown reader name, a
+glob matching no file, or a non-finite number raises :class:`CampaignError` naming the file,
+the key and its line (for the sheet: the CSV file, its row and column). Run files are *not*
+required to exist at load time: a missing recording is a failed run of the campaign (the
+observations stage records it and goes on with the others), not a broken manifest.
 
 Errors::
 
@@ -46,19 +74,24 @@ import difflib
 import math
 import re
 import tomllib
-from collections.abc import Iterator
-from dataclasses import dataclass, field
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
 from typing import Any, Literal
 
 from models.errors import ModelError
 from models.geometry.gear_sets import GearSet, gear_set_path, load_gear_set, shipped_gear_sets
+from rigtools.campaign.conditions_sheet import ConditionsSheet, read_conditions_sheet
+from rigtools.campaign.run_files import expand_run_files, is_glob, run_id_for
 from rigtools.errors import CampaignError
+from rigtools.ingest.registry import READERS
 from rigtools.schemas import iter_errors, load_schema
 
 __all__ = [
     "CONDITION_KEYS",
     "SCHEMA",
+    "SENSOR_OVERRIDES",
     "AnalysisSettings",
     "Campaign",
     "CampaignError",
@@ -72,6 +105,9 @@ SCHEMA = "campaign.schema.json"
 
 #: Condition keys of a run, in table order.
 CONDITION_KEYS = ("torque_Nm", "bulk_temperature_C", "oil_temperature_C", "speed_rpm")
+
+#: Keys of ``[sensors]`` a ``[[run]]`` may override.
+SENSOR_OVERRIDES = ("dbc", "map", "format", "accel")
 
 
 # --------------------------------------------------------------------------------------------
@@ -88,6 +124,9 @@ class Sensors:
         DBC for CAN logs (None: the reference layout).
     mapping : pathlib.Path or None
         Channel mapping file (``[sensors] map``).
+    format : str or None
+        Reader forced instead of detecting it by content (a name of
+        :data:`rigtools.ingest.registry.READERS`); None: detected.
     accel : tuple of str
         Accelerometer channels to analyse; empty: every uniform channel of each recording.
     speed : str or None
@@ -103,6 +142,7 @@ class Sensors:
     speed: str | None = None
     speed_shaft: Literal["pinion", "wheel"] = "pinion"
     pulses_per_rev: int | None = None
+    format: str | None = None
 
 
 @dataclass(frozen=True)
@@ -184,6 +224,18 @@ class CampaignRun:
     notes : str
     line : int or None
         Line of the run's ``[[run]]`` header in the campaign file.
+    dbc, mapping : pathlib.Path or None
+        The run's own DBC and mapping (``dbc``, ``map``), when it overrides them (None with
+        the key in ``overrides``: the campaign's is dropped).
+    format : str or None
+        The run's forced reader, when it overrides it.
+    accel : tuple of str
+        The run's accelerometer channels, when it overrides them.
+    overrides : tuple of str
+        The keys of ``[sensors]`` the run overrides (of :data:`SENSOR_OVERRIDES`);
+        :meth:`Campaign.sensors_for` applies them.
+    pattern : str or None
+        The glob the run's file was matched by (as written), None for a plain file.
     """
 
     id: str
@@ -195,6 +247,12 @@ class CampaignRun:
     speed_rpm: float | str | None = None
     notes: str = ""
     line: int | None = None
+    dbc: Path | None = None
+    mapping: Path | None = None
+    format: str | None = None
+    accel: tuple[str, ...] = ()
+    overrides: tuple[str, ...] = ()
+    pattern: str | None = None
 
     def conditions(self) -> dict[str, float | str | None]:
         """The four conditions by key."""
@@ -232,6 +290,12 @@ class Campaign:
     key_lines : dict
         Line of every key of the file, by its path (``("calibration", "priors", "backlash")``);
         :meth:`line_of` looks keys up in it.
+    report : dict or None
+        The ``[report]`` block as written (schema-checked, ``backlash_range_um`` increasing),
+        None when absent; read by :mod:`rigtools.report`.
+    conditions_sheet : pathlib.Path or None
+        The CSV sheet of conditions (``[campaign] conditions``), resolved; its values are
+        already in the runs.
     """
 
     name: str
@@ -248,6 +312,30 @@ class Campaign:
     calibration: dict[str, Any] | None = field(default=None, compare=False, repr=False)
     key_lines: dict[tuple[Any, ...], int] = field(default_factory=dict, compare=False,
                                                  repr=False)
+    report: dict[str, Any] | None = field(default=None, compare=False, repr=False)
+    conditions_sheet: Path | None = None
+
+    def sensors_for(self, run: CampaignRun) -> Sensors:
+        """The sensors a run is read and analysed with: ``[sensors]`` and the run's overrides.
+
+        Parameters
+        ----------
+        run : CampaignRun
+
+        Returns
+        -------
+        Sensors
+            ``[sensors]`` with the run's ``dbc``, ``map``, ``format`` and ``accel`` in place of
+            the campaign's, for the keys the run sets.
+        """
+        o = run.overrides
+        s = self.sensors
+        if not o:
+            return s
+        return replace(s, dbc=run.dbc if "dbc" in o else s.dbc,
+                       mapping=run.mapping if "map" in o else s.mapping,
+                       format=run.format if "format" in o else s.format,
+                       accel=run.accel if "accel" in o else s.accel)
 
     def line_of(self, dotted_key: str) -> int | None:
         """Line of a dotted key such as ``"calibration.priors.backlash.lower"``.
@@ -285,13 +373,19 @@ class Campaign:
         def opt(p: Path | None) -> str | None:
             return None if p is None else str(p)
 
+        def overrides(r: CampaignRun) -> dict[str, Any]:
+            values = {"dbc": opt(r.dbc), "map": opt(r.mapping), "format": r.format,
+                      "accel": list(r.accel)}
+            return {k: values[k] for k in r.overrides}
+
         s, t, a = self.sensors, self.thermal, self.analysis
         return {
             "path": str(self.path),
             "campaign": {"name": self.name, "description": self.description, "rig": self.rig,
-                         "gear_set": self.gear_set, "gear_set_path": self.gear_set_path},
-            "sensors": {"dbc": opt(s.dbc), "map": opt(s.mapping), "accel": list(s.accel),
-                        "speed": s.speed, "speed_shaft": s.speed_shaft,
+                         "gear_set": self.gear_set, "gear_set_path": self.gear_set_path,
+                         "conditions": opt(self.conditions_sheet)},
+            "sensors": {"dbc": opt(s.dbc), "map": opt(s.mapping), "format": s.format,
+                        "accel": list(s.accel), "speed": s.speed, "speed_shaft": s.speed_shaft,
                         "pulses_per_rev": s.pulses_per_rev},
             "thermal": {"reference_temperature_C": t.reference_temperature_C,
                         "housing": t.housing},
@@ -301,7 +395,10 @@ class Campaign:
                          "low_snr_dB": a.low_snr_dB, "revs_per_block": a.revs_per_block,
                          "min_step_duration_s": a.min_step_duration_s,
                          "step_rel_tolerance": a.step_rel_tolerance},
-            "run": [{"id": r.id, "file": str(r.file), "notes": r.notes, **r.conditions()}
+            "report": None if self.report is None else dict(self.report),
+            "run": [{"id": r.id, "file": str(r.file), "notes": r.notes, **r.conditions(),
+                     "file_as_written": r.file_as_written, "pattern": r.pattern,
+                     "sensors": overrides(r)}
                     for r in self.runs],
         }
 
@@ -502,22 +599,17 @@ def load_campaign(path: str | Path) -> Campaign:
     sens = doc.get("sensors", {})
     files: dict[str, Path | None] = {}
     for key in ("dbc", "map"):
-        if key in sens:
-            f = _resolve(base, sens[key])
-            if not f.is_file():
-                raise CampaignError(p, at("sensors", key), f"sensors.{key} to name an existing "
-                                    "file (relative to the campaign file)",
-                                    f"{sens[key]!r}: no such file ({f})")
-            files[key] = f
-        else:
-            files[key] = None
+        files[key] = (_sensor_file(p, base, sens[key], f"sensors.{key}", at("sensors", key))
+                      if key in sens else None)
+    if "format" in sens:
+        _check_format(p, sens["format"], "sensors.format", at("sensors", "format"))
     if "pulses_per_rev" in sens and "speed" not in sens:
         raise CampaignError(p, at("sensors", "pulses_per_rev"),
                             "sensors.speed naming the tacho channel", "pulses_per_rev alone")
     sensors = Sensors(dbc=files["dbc"], mapping=files["map"],
                       accel=tuple(sens.get("accel", ())), speed=sens.get("speed"),
                       speed_shaft=sens.get("speed_shaft", "pinion"),
-                      pulses_per_rev=sens.get("pulses_per_rev"))
+                      pulses_per_rev=sens.get("pulses_per_rev"), format=sens.get("format"))
     th = doc.get("thermal", {})
     thermal = Thermal(reference_temperature_C=_opt_float(th.get("reference_temperature_C")),
                       housing=th.get("housing"), line=lines.line(("thermal",)) if th else None)
@@ -539,23 +631,143 @@ def load_campaign(path: str | Path) -> Campaign:
                                          defaults.min_step_duration_s)),
         step_rel_tolerance=float(an.get("step_rel_tolerance", defaults.step_rel_tolerance)),
     )
-    runs = []
-    seen: dict[str, int] = {}
+    report = doc.get("report")
+    if report is not None and "backlash_range_um" in report:
+        lo, hi = report["backlash_range_um"]
+        if not lo < hi:
+            raise CampaignError(p, at("report", "backlash_range_um"), "backlash_range_um = "
+                                "[lo, hi] with lo < hi (um)", repr(report["backlash_range_um"]))
+    runs: list[CampaignRun] = []
+    origin: list[int] = []  # index of the [[run]] each run comes from
+    seen: dict[str, tuple[int, str | None]] = {}  # run id -> ([[run]] index, glob match)
     for i, r in enumerate(doc["run"]):
-        if r["id"] in seen:
-            raise CampaignError(p, at("run", i, "id"), "a unique run id",
-                                f"{r['id']!r} again (first in run {seen[r['id']] + 1}, "
-                                f"{at('run', seen[r['id']], 'id')})")
-        seen[r["id"]] = i
-        runs.append(CampaignRun(
-            id=r["id"], file=_resolve(base, r["file"]), file_as_written=r["file"],
-            **{k: _condition(r.get(k)) for k in CONDITION_KEYS},
-            notes=r.get("notes", ""), line=lines.line(("run", i))))
+        sensors_of_run = _run_sensors(p, base, r, partial(at, "run", i))
+        for file, run_id, pattern in _run_files(p, base, r, at("run", i, "file")):
+            if run_id in seen:
+                j, first_file = seen[run_id]
+                this = f" (from {file!r})" if pattern is not None else ""
+                first = f" from {first_file!r}" if first_file is not None else ""
+                raise CampaignError(p, at("run", i, "id"), "a unique run id",
+                                    f"{run_id!r}{this} again (first in run {j + 1}{first}, "
+                                    f"{at('run', j, 'id')})")
+            seen[run_id] = (i, file if pattern is not None else None)
+            origin.append(i)
+            runs.append(CampaignRun(
+                id=run_id, file=_resolve(base, file), file_as_written=file,
+                torque_Nm=_condition(r.get("torque_Nm")),
+                bulk_temperature_C=_condition(r.get("bulk_temperature_C")),
+                oil_temperature_C=_condition(r.get("oil_temperature_C")),
+                speed_rpm=_condition(r.get("speed_rpm")),
+                notes=r.get("notes", ""), line=lines.line(("run", i)), pattern=pattern,
+                **sensors_of_run))
+    sheet_path: Path | None = None
+    if "conditions" in camp:
+        sheet_path = _resolve(base, camp["conditions"])
+        if not sheet_path.is_file():
+            raise CampaignError(p, at("campaign", "conditions"), "campaign.conditions to name "
+                                "an existing CSV file (relative to the campaign file)",
+                                f"{camp['conditions']!r}: no such file ({sheet_path})")
+        sheet = read_conditions_sheet(sheet_path, CONDITION_KEYS)
+        runs = _apply_sheet(p, sheet, runs, [doc["run"][i] for i in origin], origin, at)
     return Campaign(name=camp["name"], gear_set=gear_set, gear_set_path=gear_set_path,
                     gear=gear, sensors=sensors, thermal=thermal, analysis=analysis,
                     runs=tuple(runs), path=p, description=camp.get("description", ""),
                     rig=camp.get("rig", ""), calibration=doc.get("calibration"),
-                    key_lines=dict(lines.lines))
+                    key_lines=dict(lines.lines), report=report, conditions_sheet=sheet_path)
+
+
+def _sensor_file(p: Path, base: Path, value: str, key: str, where: str | None) -> Path:
+    f = _resolve(base, value)
+    if not f.is_file():
+        raise CampaignError(p, where, f"{key} to name an existing file (relative to the "
+                            "campaign file)", f"{value!r}: no such file ({f})")
+    return f
+
+
+def _check_format(p: Path, value: str, key: str, where: str | None) -> None:
+    if value not in READERS:
+        close = difflib.get_close_matches(value.lower(), list(READERS), n=1, cutoff=0.6)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        raise CampaignError(p, where, f"{key} to be one of {', '.join(READERS)}",
+                            f"{value!r}{hint}")
+
+
+def _run_files(p: Path, base: Path, r: dict[str, Any], where: str | None
+               ) -> list[tuple[str, str, str | None]]:
+    """The files of a ``[[run]]``: (file as shown, run id, the glob or None) per run.
+
+    A plain file is shown as written; a glob's match relative to the campaign's folder
+    (absolute when the glob is).
+    """
+    file = r["file"]
+    if not is_glob(file) or _resolve(base, file).is_file():  # a file whose name holds "[" is one
+        return [(file, r["id"], None)]
+    matches = expand_run_files(base, file)
+    if not matches:
+        raise CampaignError(p, where, "the glob in run.file to match at least one file "
+                            "(relative to the campaign file)", f"{file!r}: no match in {base}")
+    out = []
+    for m in matches:
+        shown = m.relative_to(base) if m.is_relative_to(base) else m
+        out.append((shown.as_posix(), run_id_for(r["id"], m), file))
+    return out
+
+
+def _run_sensors(p: Path, base: Path, r: dict[str, Any], at: Callable[[str], str | None]
+                 ) -> dict[str, Any]:
+    """The ``[sensors]`` overrides of a ``[[run]]`` as :class:`CampaignRun` fields."""
+    out: dict[str, Any] = {}
+    for key, name in (("dbc", "dbc"), ("map", "mapping")):
+        if key in r:
+            out[name] = (None if r[key] == "" else
+                         _sensor_file(p, base, r[key], f"run.{key}", at(key)))
+    if "format" in r:
+        _check_format(p, r["format"], "run.format", at("format"))
+        out["format"] = r["format"]
+    if "accel" in r:
+        out["accel"] = tuple(r["accel"])
+    out["overrides"] = tuple(k for k in SENSOR_OVERRIDES if k in r)
+    return out
+
+
+def _apply_sheet(p: Path, sheet: ConditionsSheet, runs: list[CampaignRun],
+                 tables: list[dict[str, Any]], origin: list[int],
+                 at: Callable[..., str | None]
+                 ) -> list[CampaignRun]:
+    """The runs with the sheet's values where their ``[[run]]`` gives none.
+
+    A run giving a value and the sheet another is an error naming both; a sheet row naming no
+    run of the campaign is an error naming its row; a run the sheet does not name is kept as
+    it is.
+    """
+    by_id = {r.id: r for r in runs}
+    for sheet_row in sheet.rows.values():
+        if sheet_row.run_id not in by_id:
+            close = difflib.get_close_matches(sheet_row.run_id, list(by_id), n=1, cutoff=0.6)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise CampaignError(sheet.path, f"row {sheet_row.row}, column 'run_id'",
+                                f"a run id of the campaign {p}",
+                                f"{sheet_row.run_id!r}{hint}, not a run of it")
+    out = []
+    for run, table, i in zip(runs, tables, origin, strict=True):
+        row = sheet.rows.get(run.id)
+        if row is None:
+            out.append(run)
+            continue
+        changes: dict[str, Any] = {}
+        for key, value in row.values.items():
+            if key not in table:
+                changes[key] = value
+                continue
+            given = table[key]
+            same = (given == value if isinstance(given, str) or isinstance(value, str)
+                    else float(given) == float(value))
+            if not same:
+                raise CampaignError(p, at("run", i, key), f"one value of {key} for run {run.id!r}",
+                                    f"{given!r} here and {value!r} in {sheet.path} at row "
+                                    f"{row.row}, column {key!r}")
+        out.append(replace(run, **changes) if changes else run)
+    return out
 
 
 def _opt_float(v: Any) -> float | None:

@@ -131,6 +131,11 @@ class RunObservations:
         Why the run failed (the file and the reason), when it did.
     warnings : tuple of str
         Problems that flagged rows but did not fail the run.
+    spectra : dict of str to (numpy.ndarray, numpy.ndarray, str)
+        Channel -> ``(frequency_Hz, psd, psd_unit)``: the one-sided Welch PSD the channel's
+        peaks were found on (bin frequencies in Hz, PSD in ``psd_unit``, the channel's unit
+        squared per Hz, e.g. ``"(m/s^2)^2/Hz"``), for every channel that was analysed. Not
+        part of the table nor of equality.
     """
 
     run_id: str
@@ -139,6 +144,8 @@ class RunObservations:
     analysed: bool
     error: str | None = None
     warnings: tuple[str, ...] = ()
+    spectra: dict[str, tuple[np.ndarray, np.ndarray, str]] = field(default_factory=dict,
+                                                                   compare=False, repr=False)
 
 
 @dataclass(frozen=True)

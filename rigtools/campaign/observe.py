@@ -1,10 +1,13 @@
 r"""The observations table: one tidy table per campaign, the input of calibration and reports.
 
 :func:`observe_campaign` reads every run of a :class:`~rigtools.campaign.Campaign`
-(:func:`rigtools.ingest.read`), analyses its accelerometer channels
+(:func:`read_run`: :func:`rigtools.ingest.read` with the run's effective sensors), analyses its
+accelerometer channels (:func:`observe_recording`
 (:func:`~rigtools.analysis.recording.analyse_recording`: Welch PSD, RMS, natural frequencies with
 damping and uncertainties; :func:`~rigtools.analysis.orders.step_levels`: mesh harmonics and
 Arms per speed step) and collects the numbers in one long :class:`pandas.DataFrame`.
+:func:`observe_run` is the two steps for one run; a pipeline that keeps the recording between
+them (normalized Parquet) calls :func:`read_run` and :func:`observe_recording` apart.
 
 Layout
 ------
@@ -83,7 +86,7 @@ from __future__ import annotations
 import ast
 import math
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Final
 
 import numpy as np
@@ -112,7 +115,8 @@ from rigtools.ingest import RunMetadata, read
 from rigtools.ingest.reader import versions
 from rigtools.ingest.recording import IngestReport, Recording
 
-__all__ = ["observe_campaign", "observe_run"]
+__all__ = ["observations_metadata", "observe_campaign", "observe_recording", "observe_run",
+           "read_run"]
 
 
 #: Acceleration units and their factor to m/s^2.
@@ -203,9 +207,46 @@ def _failed_run(base: dict[str, Any], run: CampaignRun, reason: str) -> RunObser
     return RunObservations(run.id, str(run.file), (_status(row),), analysed=False, error=msg)
 
 
+def _base_row(campaign: Campaign, run: CampaignRun) -> dict[str, Any]:
+    return {
+        "campaign": campaign.name, "run_id": run.id, "source_file": run.file_as_written,
+        "rigtools_version": __version__,
+        **{k: v for k, v in run.numeric_conditions().items()},
+    }
+
+
+def read_run(campaign: Campaign, run: CampaignRun) -> Recording:
+    """Read a run's recording with the run's effective sensors.
+
+    Parameters
+    ----------
+    campaign : Campaign
+    run : CampaignRun
+
+    Returns
+    -------
+    Recording
+        :func:`rigtools.ingest.read` of ``run.file`` with the DBC, mapping and forced format
+        of :meth:`Campaign.sensors_for`, and the run's metadata (id, rig, gear set, numeric
+        conditions).
+
+    Raises
+    ------
+    RecordingFormatError
+        The file is missing, not a recording, or unusable (and the other errors of
+        :func:`rigtools.ingest.read`: a DBC or mapping that does not fit, an OS error).
+    """
+    s = campaign.sensors_for(run)
+    meta = RunMetadata(run_id=run.id, rig=campaign.rig or None, gear_set=campaign.gear_set,
+                       conditions=run.numeric_conditions())
+    return read(run.file, dbc=s.dbc, mapping=s.mapping, fmt=s.format, metadata=meta)
+
+
 def observe_run(campaign: Campaign, run: CampaignRun, *, raise_errors: bool = False
                 ) -> RunObservations:
     """Read and analyse one run of a campaign into rows of the observations table.
+
+    :func:`read_run` then :func:`observe_recording`.
 
     Parameters
     ----------
@@ -220,33 +261,63 @@ def observe_run(campaign: Campaign, run: CampaignRun, *, raise_errors: bool = Fa
         Never raises for a bad run (unless ``raise_errors``): the failure is a failed ``run``
         row naming the file and the reason.
     """
-    base: dict[str, Any] = {
-        "campaign": campaign.name, "run_id": run.id, "source_file": run.file_as_written,
-        "rigtools_version": __version__,
-        **{k: v for k, v in run.numeric_conditions().items()},
-    }
     try:
-        return _observe_run(campaign, run, base)
-    except (RigtoolsError, OSError, ValueError) as exc:
-        if raise_errors:
-            raise
+        rec = read_run(campaign, run)
+    except Exception as exc:
+        return _failure(campaign, run, _base_row(campaign, run), exc, raise_errors)
+    return observe_recording(campaign, run, rec, raise_errors=raise_errors)
+
+
+def observe_recording(campaign: Campaign, run: CampaignRun, rec: Recording, *,
+                      raise_errors: bool = False) -> RunObservations:
+    """Analyse a run's recording into rows of the observations table.
+
+    Everything :func:`observe_run` does after reading: conditions named as slow signals, the
+    speed profile and its steps, the spectra, peaks and modes of the run's accelerometer
+    channels (:meth:`Campaign.sensors_for`: the run's ``accel`` when it overrides it), Arms per
+    step, and the run row with the ingest's losses.
+
+    Parameters
+    ----------
+    campaign : Campaign
+    run : CampaignRun
+    rec : Recording
+        The run's recording (:func:`read_run`, or the normalized Parquet it was saved as).
+    raise_errors : bool
+        Re-raise instead of recording a failure (for debugging).
+
+    Returns
+    -------
+    RunObservations
+        With ``spectra`` holding each analysed channel's Welch PSD. Never raises for a bad
+        run (unless ``raise_errors``): the failure is a failed ``run`` row.
+    """
+    base = _base_row(campaign, run)
+    try:
+        return _observe_recording(campaign, run, rec, base)
+    except Exception as exc:
+        return _failure(campaign, run, base, exc, raise_errors)
+
+
+def _failure(campaign: Campaign, run: CampaignRun, base: dict[str, Any], exc: Exception,
+             raise_errors: bool) -> RunObservations:
+    """The failed run an exception makes (re-raised when ``raise_errors``)."""
+    if raise_errors:
+        raise exc
+    if isinstance(exc, RigtoolsError | OSError | ValueError):
         reason = str(exc)
         if isinstance(exc, OSError) and not isinstance(exc, RigtoolsError):
             reason = f"{exc.strerror or exc}"
         return _failed_run(base, run, reason)
-    except Exception as exc:  # a bug: record it loudly, keep the other runs
-        if raise_errors:
-            raise
-        return _failed_run(base, run, f"internal error {type(exc).__name__}: {exc} (rerun "
-                           "with --debug for a traceback, and please report it)")
+    # a bug: record it loudly, keep the other runs
+    return _failed_run(base, run, f"internal error {type(exc).__name__}: {exc} (rerun "
+                       "with --debug for a traceback, and please report it)")
 
 
-def _observe_run(campaign: Campaign, run: CampaignRun, base: dict[str, Any]
-                 ) -> RunObservations:
-    s, a = campaign.sensors, campaign.analysis
-    meta = RunMetadata(run_id=run.id, rig=campaign.rig or None, gear_set=campaign.gear_set,
-                       conditions=run.numeric_conditions())
-    rec = read(run.file, dbc=s.dbc, mapping=s.mapping, metadata=meta)
+def _observe_recording(campaign: Campaign, run: CampaignRun, rec: Recording,
+                       base: dict[str, Any]) -> RunObservations:
+    s, a = campaign.sensors_for(run), campaign.analysis
+    where = "[[run]] accel" if "accel" in run.overrides else "[sensors] accel"
     prov = rec.provenance
     base.update(source_sha256=prov.source_sha256, reader=prov.reader)
     run_flags: list[str] = []
@@ -293,7 +364,7 @@ def _observe_run(campaign: Campaign, run: CampaignRun, base: dict[str, Any]
     rows: list[dict[str, Any]] = []
     for c in missing:
         run_flags.append("channel_missing")
-        msg = (f"channel {c!r} named in [sensors] accel is not in the recording (it holds: "
+        msg = (f"channel {c!r} named in {where} is not in the recording (it holds: "
                f"{', '.join(sorted(rec.channels)) or 'none'})")
         notes.append(msg)
         rows.append(_status({**base, "channel": c, "quantity": "rms", "status": "failed",
@@ -311,6 +382,10 @@ def _observe_run(campaign: Campaign, run: CampaignRun, base: dict[str, Any]
     speed_note = None if profile is None else _speed_varies(profile, a.step_rel_tolerance, z1,
                                                              z_tracked)
     n_ok = 0
+    spectra = {name: (np.asarray(ca.spectrum.freq_Hz, np.float64),
+                      np.asarray(ca.spectrum.psd_per_Hz, np.float64), ca.spectrum.psd_unit)
+               for name, ca in (analysis.channels.items() if analysis is not None else ())
+               if ca.spectrum is not None}
     for name, ca in (analysis.channels.items() if analysis is not None else ()):
         ch_rows, ok = _channel_rows(base, rec, ca, campaign, speed_note)
         n_ok += ok
@@ -351,9 +426,9 @@ def _observe_run(campaign: Campaign, run: CampaignRun, base: dict[str, Any]
         out = (_status(run_row), *rows)
         return RunObservations(run.id, str(run.file), out, analysed=False,
                                error=f"{run.file}: {run_row['message']}",
-                               warnings=warnings)
+                               warnings=warnings, spectra=spectra)
     return RunObservations(run.id, str(run.file), (_status(run_row), *rows), analysed=True,
-                           warnings=warnings)
+                           warnings=warnings, spectra=spectra)
 
 
 def _speed_varies(profile: SpeedProfile, rel_tolerance: float, z1: int, z_tracked: int
@@ -747,10 +822,22 @@ def observe_campaign(campaign: Campaign, *,
             on_run(r)
     rows = [row for r in runs for row in r.rows]
     return Observations(table=to_frame(rows), runs=tuple(runs),
-                        metadata=_metadata(campaign, runs))
+                        metadata=observations_metadata(campaign, [
+                            {"id": r.run_id, "file": r.file, "analysed": r.analysed,
+                             "error": r.error} for r in runs]))
 
 
-def _metadata(campaign: Campaign, runs: list[RunObservations]) -> dict[str, Any]:
+def observations_metadata(campaign: Campaign, runs: Sequence[Mapping[str, Any]]
+                          ) -> dict[str, Any]:
+    """The metadata written with an observations table (JSON-ready).
+
+    Parameters
+    ----------
+    campaign : Campaign
+    runs : sequence of mapping
+        Per run, in campaign order: ``id``, ``file``, ``analysed`` (bool), ``error`` (str or
+        None).
+    """
     return {
         "format": "rigtools observations",
         "schema": f"data_schemas/{SCHEMA}",
@@ -761,6 +848,5 @@ def _metadata(campaign: Campaign, runs: list[RunObservations]) -> dict[str, Any]
         "max_mesh_order": MAX_MESH_ORDER,
         "flags": FLAGS,
         "versions": versions(),
-        "runs": [{"id": r.run_id, "file": r.file, "analysed": r.analysed, "error": r.error}
-                 for r in runs],
+        "runs": [dict(r) for r in runs],
     }

@@ -28,13 +28,13 @@ from collections.abc import Sequence
 
 from models.errors import ModelError
 from rigtools import __version__
-from rigtools.cli import calibrate, demo, info, ingest, observe, plan, spectrum
+from rigtools.cli import calibrate, demo, info, ingest, observe, plan, report, run, spectrum
 from rigtools.cli.common import EXIT_OK, EXIT_UNUSABLE, EXIT_USAGE, fail
 from rigtools.errors import RigtoolsError
 
 __all__ = ["EXIT_OK", "EXIT_UNUSABLE", "EXIT_USAGE", "build_parser", "main", "tune_allocator"]
 
-_SUBCOMMANDS = (ingest, info, spectrum, observe, calibrate, plan, demo)
+_SUBCOMMANDS = (ingest, info, spectrum, observe, calibrate, plan, run, report, demo)
 
 
 def build_parser() -> argparse.ArgumentParser:

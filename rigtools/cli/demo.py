@@ -1,24 +1,32 @@
 """``rigtools demo``: the main job on the built-in demo campaign.
 
-Until the full demo campaign exists (calibration and report issues), the demo writes a small
-synthetic rig run in the reference formats (MCAP with protobuf batches, BLF and candump with
-the reference DBC), ingests each, prints ``info``, checks that the formats agree sample for
-sample, and runs a first analysis (spectra, RMS, dominant peaks) against the known truth.
+Generates an FZG-C backlash study from the physics with a known truth
+(:func:`rigtools.demo.campaign.generate_demo_campaign`: recordings at seed 000's torques and
+bulk temperatures that cross the regime flip, half MCAP and half CAN logs of another layout
+with its DBC and mapping, a housing mode taller than the mesh mode at some runs, a few
+dropped frames) into ``FOLDER/campaign/``, then runs ``rigtools run`` on it into
+``FOLDER/results/``: ingest, observe, calibrate, and the validation report with the truth
+beside the posterior. The campaign file stays beside the recordings: edit it, or point a copy
+at your own runs, and run ``rigtools run`` on it.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import sys
+from pathlib import Path
 from typing import Any, Final
 
 from rigtools.cli.arguments import float_in_range, int_at_least
 from rigtools.cli.common import fail, output_problem
+from rigtools.cli.run import add_pipeline_options, run_pipeline
 
 __all__ = ["MAX_DURATION_S", "MIN_DURATION_S", "add_parser", "run"]
 
-#: Shortest run (s): the order analysis needs a speed step of 1 s of whole revolutions.
+#: Shortest run (s): the SDOF fits need a few seconds of averaging at 25.6 kHz.
 MIN_DURATION_S: Final = 1.5
-#: Longest run (s): about a minute of writing and reading per 10 s, 2 GB of memory at 60 s.
+#: Longest run (s).
 MAX_DURATION_S: Final = 60.0
 
 
@@ -39,20 +47,34 @@ def add_parser(subparsers: Any) -> None:
         description=" ".join(doc[-1].replace("``", "").split()),
     )
     p.add_argument("-o", "--output", default="demo-out", metavar="FOLDER",
-                   help="output folder, created if needed (default demo-out)")
-    p.add_argument("--duration", type=_duration, default=4.0, metavar="S",
-                   help=f"length of the run in seconds, {MIN_DURATION_S:g} to "
-                   f"{MAX_DURATION_S:g} (default 4)")
+                   help="output folder, created if needed (default demo-out): campaign/ "
+                   "holds the generated campaign, results/ the report")
+    p.add_argument("--size", choices=("full", "ci"), default="full",
+                   help="full: 12 runs of 8 s (default); ci: 8 runs of 3 s")
+    p.add_argument("--duration", type=_duration, default=None, metavar="S",
+                   help=f"length of each run in seconds, {MIN_DURATION_S:g} to "
+                   f"{MAX_DURATION_S:g} (default by size)")
     p.add_argument("--seed", type=_seed, default=0,
-                   help="random seed of the synthetic run, an integer >= 0 (default 0)")
+                   help="random seed of the generated campaign, an integer >= 0 (default 0)")
+    add_pipeline_options(p, seed=False, jobs=min(2, os.cpu_count() or 1))
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the subcommand."""
-    problem = output_problem(args.output, folder=True)
+    out = Path(args.output)
+    problem = output_problem(out, folder=True)
     if problem:
         return fail(problem)
-    from rigtools.demo.run import run_demo
+    from rigtools.demo.campaign import generate_demo_campaign
 
-    return run_demo(args.output, duration_s=args.duration, seed=args.seed)
+    if not args.quiet:
+        print(f"rigtools: generating the demo campaign ({args.size}) in {out / 'campaign'}",
+              file=sys.stderr)
+    demo = generate_demo_campaign(out / "campaign", seed=args.seed, size=args.size,
+                                  duration_s=args.duration)
+    code = run_pipeline(args, demo.campaign_path, out / "results", truth=demo.truth_path)
+    if not args.quiet:
+        print(f"\nthe campaign file: {demo.campaign_path} (edit it, or point a copy at your "
+              f"own recordings, then: rigtools run {demo.campaign_path} -o results)")
+    return code

@@ -25,9 +25,9 @@ rigtools, made from a known truth (:mod:`rigtools.demo.truth`):
 Sizes: ``"full"`` (12 runs of 8 s, three axes at 25.6 kHz; the README's ``rigtools demo``) and
 ``"ci"`` (8 runs of 3 s at three temperatures, for the test suite).
 
-The campaign schema has no per-run ``dbc``/``map``/``format`` yet, so the CAN layout sits in
-``[sensors]`` for the whole campaign: the MCAP reader ignores the DBC, and the mapping names
-only CAN messages (no MCAP topics), so MCAP runs decode as they would without it.
+The two loggers sit in one campaign as they would on a real rig: ``[sensors]`` names the
+channels all runs share, and each CAN ``[[run]]`` names its own ``dbc``, ``map`` and
+``format`` (the MCAP runs need none).
 """
 
 from __future__ import annotations
@@ -206,8 +206,8 @@ def _campaign_text(truth: CampaignTruth, runs: list[DemoRun], *, seed: int, size
         "# The built-in demo campaign of rigtools (`rigtools demo`), generated from the physics of",
         f"# models.thermal with a known truth (truth.json); seed {seed}, size {size!r}.",
         "# To study your own rig: copy this file, point each [[run]] file at your recordings,",
-        "# state their conditions, and give [sensors] dbc/map for your CAN layout (MCAP needs",
-        "# neither). Then: rigtools observe campaign.toml -o observations.parquet",
+        "# state their conditions, and give dbc/map for your CAN layout (in [sensors] for all",
+        "# runs, or per [[run]]; MCAP needs neither). Then: rigtools run campaign.toml -o results",
         "",
         "[campaign]",
         'name = "FZG-C demo: backlash and thermal closure"',
@@ -219,11 +219,7 @@ def _campaign_text(truth: CampaignTruth, runs: list[DemoRun], *, seed: int, size
         f"rig = {_toml_str(_RIG)}",
         "",
         "[sensors]",
-        "# The CAN runs use another layout than the reference DBC (one frame per sample time,",
-        "# counter + three axes); the MCAP runs ignore the DBC and the mapping, which names",
-        "# only CAN messages.",
-        f"dbc = {_toml_str(dbc.relative_to(base).as_posix())}",
-        f"map = {_toml_str(mapping.relative_to(base).as_posix())}",
+        "# The channels every run has; the CAN runs name their own layout (dbc, map) below.",
         "accel = [" + ", ".join(_toml_str(c) for c in ACCEL_CHANNELS) + "]",
         'speed = "PinionSpeed_rpm"',
         "",
@@ -255,6 +251,12 @@ def _campaign_text(truth: CampaignTruth, runs: list[DemoRun], *, seed: int, size
             f"speed_rpm = {r.speed_rpm!r}",
             f"notes = {_toml_str(note[dr.format] + extra)}",
         ]
+        if dr.format != "mcap":   # another logger: one frame per sample time, counter + 3 axes
+            lines += [
+                f"format = {_toml_str(dr.format)}",
+                f"dbc = {_toml_str(dbc.relative_to(base).as_posix())}",
+                f"map = {_toml_str(mapping.relative_to(base).as_posix())}",
+            ]
     return "\n".join(lines) + "\n"
 
 

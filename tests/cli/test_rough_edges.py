@@ -62,10 +62,9 @@ def test_demo_help_is_whole_and_states_the_range(capsys):
     assert exc.value.code == 0
     text = " ".join(capsys.readouterr().out.split())
     # the description is the module docstring's paragraph, to its last word
-    assert "runs a first analysis (spectra, RMS, dominant peaks) against the known truth." \
-        in text
-    assert "writes a small options:" not in text
-    assert "length of the run in seconds, 1.5 to 60 (default 4)" in text
+    assert "point a copy at your own runs, and run rigtools run on it." in text
+    assert "options:" in text and "Generates an FZG-C options:" not in text
+    assert "length of each run in seconds, 1.5 to 60 (default by size)" in text
 
 
 def test_demo_output_that_cannot_be_a_folder(tmp_path, capsys):

@@ -24,7 +24,7 @@ import pytest
 from scipy.signal import welch
 
 from models.thermal import SEED_000_CHI, critical_gap
-from rigtools.campaign import load_campaign
+from rigtools.campaign import load_campaign, read_run
 from rigtools.demo.campaign import (
     DEFAULT_DURATION_S,
     MCAP_LSB_M_S2,
@@ -32,7 +32,6 @@ from rigtools.demo.campaign import (
     generate_demo_campaign,
 )
 from rigtools.demo.triax_can import ACCEL_CHANNELS, ACCEL_LSB_M_S2
-from rigtools.ingest import read
 
 FS = 25_600.0
 NPERSEG = 4096
@@ -51,8 +50,7 @@ def truth_json(demo) -> dict:
 @pytest.fixture(scope="module")
 def recordings(demo) -> dict:
     camp = load_campaign(demo.campaign_path)
-    return {r.id: read(r.file, dbc=camp.sensors.dbc, mapping=camp.sensors.mapping)
-            for r in camp.runs}
+    return {r.id: read_run(camp, r) for r in camp.runs}
 
 
 # -- files and campaign ------------------------------------------------------------------------
@@ -61,7 +59,7 @@ def recordings(demo) -> dict:
 def test_campaign_file_lists_every_run_with_its_conditions(demo) -> None:
     camp = load_campaign(demo.campaign_path)
     assert camp.gear_set == "fzg-c"
-    assert camp.sensors.dbc == demo.dbc_path and camp.sensors.mapping == demo.mapping_path
+    assert camp.sensors.dbc is None and camp.sensors.mapping is None
     assert camp.sensors.accel == ACCEL_CHANNELS
     assert camp.thermal.reference_temperature_C == demo.truth.physics.reference_temperature_C
     assert [r.id for r in camp.runs] == [c.run_id for c in demo_conditions("ci")]
@@ -72,6 +70,14 @@ def test_campaign_file_lists_every_run_with_its_conditions(demo) -> None:
         assert (run.torque_Nm, run.bulk_temperature_C, run.speed_rpm) == (
             t.torque_Nm, t.bulk_temperature_C, t.speed_rpm)
         assert run.oil_temperature_C == pytest.approx(t.oil_temperature_C, abs=0.005)
+        # two loggers in one campaign: the CAN runs name their own layout, MCAP runs none
+        sensors = camp.sensors_for(run)
+        fmt = {r.run_id: r.format for r in demo.runs}[run.id]
+        if fmt == "mcap":
+            assert sensors.dbc is None and sensors.mapping is None, run.id
+        else:
+            assert (sensors.dbc, sensors.mapping) == (demo.dbc_path, demo.mapping_path), run.id
+            assert sensors.format == fmt, run.id
 
 
 def test_half_the_runs_are_mcap_half_can_of_another_layout(demo) -> None:

@@ -1,0 +1,47 @@
+"""The pipeline of ``rigtools run``: ingest -> observe -> calibrate -> report, into one OUTDIR.
+
+Modules: ``stems`` (:func:`run_file_stem`, the file stem of a run id), ``atomic`` (atomic
+writes), ``cache`` (stage keys), ``progress`` (tqdm bars or log lines), ``executor`` (in
+process, process pool, dask), ``run_tasks`` (ingest and observe of one run, sent to workers),
+``stages`` (the four stages), ``result`` (:class:`PipelineResult`, ``pipeline.json``),
+``errors`` and ``run`` (:func:`run_campaign`).
+
+:func:`run_campaign` and :class:`PipelineResult` are imported on first use: a worker process
+that only ingests and observes runs does not load the calibration, the figures or the report.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+from rigtools.pipeline.errors import PipelineError
+from rigtools.pipeline.stems import run_file_stem
+
+if TYPE_CHECKING:
+    from rigtools.pipeline.result import STAGES, PipelineResult, RunStatus
+    from rigtools.pipeline.run import run_campaign
+
+__all__ = ["STAGES", "PipelineError", "PipelineResult", "RunStatus", "run_campaign",
+           "run_file_stem"]
+
+#: Names whose modules load the calibration and the report, imported on first access.
+_ON_FIRST_USE = {
+    "STAGES": "rigtools.pipeline.result",
+    "PipelineResult": "rigtools.pipeline.result",
+    "RunStatus": "rigtools.pipeline.result",
+    "run_campaign": "rigtools.pipeline.run",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _ON_FIRST_USE.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
