@@ -11,6 +11,7 @@ checks), :mod:`~rigtools.analysis.windows` (gap-aware segmenting),
 :mod:`~rigtools.analysis.spectrum_results`),
 :mod:`~rigtools.analysis.peaks` (peak detection and mesh-line classification),
 :mod:`~rigtools.analysis.sdof_fit` (half-power damping and the single-DOF fit),
+:mod:`~rigtools.analysis.two_mode_fit` (two close modes in one peak, fitted jointly),
 :mod:`~rigtools.analysis.recording` (the :func:`analyse_recording` entry point),
 :mod:`~rigtools.analysis.speed` (shaft speed from a slow signal or a tacho, mesh frequency,
 speed steps; over :mod:`~rigtools.analysis.speed_types`, :mod:`~rigtools.analysis.tacho`,
@@ -85,6 +86,7 @@ from rigtools.analysis.speed import (
     speed_profile,
     tacho_edges,
 )
+from rigtools.analysis.two_mode_fit import TwoModeFit, fit_two_modes_in_band
 from rigtools.analysis.windows import Segments, n_windows, valid_segments
 from rigtools.errors import (
     ConstantSignalError,
@@ -122,6 +124,7 @@ __all__ = [
     "SpeedProfile",
     "SpeedStep",
     "StepLevels",
+    "TwoModeFit",
     "WelchAccount",
     "WindowProperties",
     "acceleration_to_displacement",
@@ -133,6 +136,7 @@ __all__ = [
     "detect_clipping",
     "detect_speed_steps",
     "fit_sdof",
+    "fit_two_modes_in_band",
     "frequency_campbell",
     "half_power_damping",
     "harmonic_amplitudes",

@@ -56,6 +56,21 @@ For each peak of a Welch PSD (:class:`~rigtools.analysis.spectra.Spectrum`):
 
    Estimates from a PSD with fewer than ``LOW_DOF`` equivalent dof are flagged
    ``ModalEstimate.low_dof``.
+
+   5a. **Two close modes in one peak.** Every structural peak (and every unresolved peak
+   that is no mesh or shaft line, such as the merged peak of two modes whose maximum lies off
+   its single-DOF fit's f_n) is fitted again as two modes
+   (:func:`~rigtools.analysis.two_mode_fit.fit_two_modes_in_band`), over a band that reaches
+   past the other structural or unresolved peaks within ``JOINT_REACH`` half-power bandwidths,
+   with every mesh harmonic (of any order), sideband and shaft harmonic that stands out there
+   masked (``LINE_STAND_OUT_FALSE_ALARM``: a cluster of weak lines is not a second mode).
+   When the two-mode model is clearly better (a chi-square-difference test at a false alarm
+   of :data:`~rigtools.analysis.two_mode_fit.JOINT_FALSE_ALARM`, the modes apart by more than
+   three standard uncertainties, the joint model fitting, both modes' damping resolved
+   beyond doubt, and broad where a mode sits at a mesh or shaft line) each mode becomes
+   its own structural peak at its f_n, its fit flagged ``joint_fit`` (without ``misfit``) and
+   carrying the joint fit (:attr:`ModalEstimate.joint`); otherwise the single-DOF fit stands
+   with its flags.
 6. **A line on a mode**: every line is masked out of the fits of the modes beside it (its
    main lobe, further while the PSD falls), and the structural peaks are refitted so. A line
    that sits on a mode hides the mode's maximum, so both are reported: for each line the PSD
@@ -90,7 +105,8 @@ References
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+import math
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass, replace
 from typing import Any, Literal
 
@@ -110,11 +126,18 @@ from rigtools.analysis.sdof_fit import (
     half_power_in_band,
     mask_line,
     not_fitted,
+    sdof_shape,
     zeta_resolution,
 )
-from rigtools.analysis.signal_checks import Response, check_band, check_response
+from rigtools.analysis.signal_checks import (
+    RESPONSE_POWER,
+    Response,
+    check_band,
+    check_response,
+)
 from rigtools.analysis.spectra import log_chi2_stats
 from rigtools.analysis.spectrum_results import Spectrum
+from rigtools.analysis.two_mode_fit import TwoModeFit, fit_two_modes_in_band, joint_band
 from rigtools.errors import SignalError
 
 __all__ = [
@@ -128,6 +151,7 @@ __all__ = [
     "Peak",
     "PeakAnalysis",
     "SDOFFit",
+    "TwoModeFit",
     "analyse_peaks",
     "classify_frequency",
     "detection_threshold_db",
@@ -135,6 +159,10 @@ __all__ = [
     "half_power_damping",
     "natural_frequencies",
 ]
+
+# log10(e): 10 log10(e) dB per unit of natural log of power (math.e: mypy misreads numpy's e
+# once numba, which ships its types, is analysed in the same run)
+_LOG10_E = math.log10(math.e)
 
 PeakKind = Literal["structural", "mesh_harmonic", "mesh_sideband", "shaft_harmonic", "tonal",
                    "unresolved"]
@@ -166,6 +194,12 @@ SHOULDER_SMOOTHING_BINS = 7
 LINE_ON_MODE_WIDTHS = 2.0
 #: ... and when its bin stands at least this far above the mode fitted without it (dB).
 LINE_ON_MODE_MIN_DB = 3.0
+#: Peaks within this many half-power bandwidths of a peak are fitted with it as two modes
+#: (module docstring, 5a).
+JOINT_REACH = 3.0
+#: A mesh or shaft line of any order is masked out of a joint fit where its bin stands above
+#: its surroundings by more than noise does with this probability (module docstring, 5a).
+LINE_STAND_OUT_FALSE_ALARM = 1e-3
 
 
 # --------------------------------------------------------------------------------------------
@@ -200,6 +234,11 @@ class ModalEstimate:
         Bin spacing of the PSD (Hz).
     mainlobe_half_width_Hz : float
         Half-width of the window's main lobe (Hz; 2 bins for Hann): how wide a line is.
+    joint : TwoModeFit or None
+        For a mode fitted jointly with a close neighbour (``"joint_fit"`` in the fit's flags,
+        module docstring 5a): the joint fit, with the covariance of both modes' f_n and zeta;
+        ``f_peak_Hz`` is then the fitted f_n (the merged peak has one maximum for two modes)
+        and the half-power damping is not measured. Else None.
     """
 
     f_n_Hz: float
@@ -222,6 +261,8 @@ class ModalEstimate:
     resolution_Hz: float = float("nan")
     #: Half-width of the window's main lobe (Hz).
     mainlobe_half_width_Hz: float = float("nan")
+    #: The joint fit this mode comes from, if any.
+    joint: TwoModeFit | None = None
 
     @property
     def broad(self) -> bool:
@@ -605,8 +646,10 @@ class _Peaks:
     def __init__(self, ctx: PSDContext, p: int, fit_span: float, response: str,
                  threshold_dB: float, false_alarm: float) -> None:
         self.ctx, self.p, self.fit_span, self.response = ctx, p, fit_span, response
-        self.threshold = float(threshold_dB) / (10 * np.log10(np.e))  # natural log
+        self.threshold = float(threshold_dB) / (10 * _LOG10_E)  # natural log
         self.false_alarm = float(false_alarm)
+        #: Bins of every mesh harmonic (any order), its sidebands and the shaft harmonics.
+        self.line_bins = np.zeros(0, np.int64)
 
     def estimate(self, k: int, lo: int, hi: int, mask: np.ndarray, line: bool = False
                  ) -> ModalEstimate:
@@ -643,7 +686,42 @@ class _Peaks:
         if not height >= self.threshold:
             return None
         mode = self.estimate(k0, lo, hi, own)
-        return (mode, 10 * np.log10(np.e) * height) if mode.broad else None
+        return (mode, 10 * _LOG10_E * height) if mode.broad else None
+
+    def two_modes(self, k: int, mode: ModalEstimate, limits: Sequence[int], mask: np.ndarray,
+                  locate: Callable[[float], LocationClass], joined: Collection[int] = ()
+                  ) -> tuple[TwoModeFit, tuple[int, ...]] | None:
+        """Two close modes in the peak at bin k, fitted jointly, when they are clearly there.
+
+        Tried on every peak whose single-DOF fit succeeded (the test of
+        :mod:`~rigtools.analysis.two_mode_fit` keeps one mode whole); another structural or
+        unresolved peak (of ``limits``) within :data:`JOINT_REACH` half-power bandwidths is a
+        partner (unless in ``joined``, reported by a joint fit already): the band reaches past
+        the partner peaks
+        (:func:`~rigtools.analysis.two_mode_fit.joint_band`) up to the dip before the next
+        peak. Returns the accepted joint fit (both modes resolved, :func:`_joint_mode_resolved`)
+        and the partner peaks it covers, or None: the single-DOF fit stands, with its flags.
+        """
+        ctx, fit = self.ctx, mode.fit
+        if not (fit.success and np.isfinite(fit.zeta)):
+            return None
+        reach = JOINT_REACH * 2 * fit.zeta * fit.f_n_Hz
+        partners = tuple(j for j in limits if j != k and j not in joined
+                         and abs(ctx.f[j] - ctx.f[k]) <= reach)
+        group = (k, *partners)
+        lo, hi = _band(ctx, k, [j for j in limits if j not in group], mask)
+        a, b = joint_band(ctx, fit, min(group), max(group), lo, hi, self.fit_span)
+        mask = _mask_standing_lines(ctx, self.line_bins, a, b, mask)
+        tm = fit_two_modes_in_band(ctx, a, b, mask, fit, mode.zeta_resolution, self.p,
+                                   hints_Hz=[float(ctx.f[j]) for j in partners])
+        if tm is None or not tm.accepted:
+            return None
+        if not all(_joint_mode_resolved(e, locate(e.f_n_Hz))
+                   for e in _joint_estimates(ctx, tm, self.response)):
+            return None
+        covered = tuple(j for j in limits if j != k and j not in joined and any(
+            abs(ctx.f[j] - m.f_n_Hz) <= max(reach, 2 * m.zeta * m.f_n_Hz) for m in tm.modes))
+        return tm, covered
 
     def prominence_without_lines(self, k: int, mask: np.ndarray) -> float:
         """Prominence (dB) of the peak at bin k on the PSD smoothed with the lines masked.
@@ -663,7 +741,7 @@ class _Peaks:
                 k0 += step
         if not (0 < k0 < filled.size - 1):
             return float("nan")
-        return float(10 * np.log10(np.e) * sps.peak_prominences(filled, [k0])[0][0])
+        return float(10 * _LOG10_E * sps.peak_prominences(filled, [k0])[0][0])
 
     def line_on(self, k: int, mode: ModalEstimate, mask: np.ndarray) -> bool:
         r"""The PSD at bin k stands above the mode fitted without it beyond the Welch scatter.
@@ -698,7 +776,7 @@ class _Peaks:
         spread = 1.4826 * float(np.median(np.abs(resid - centre)))
         # the model's misfit widens the residuals beyond the estimator's own scatter
         threshold *= max(1.0, spread / np.sqrt(ctx.eps2))
-        threshold = max(threshold, LINE_ON_MODE_MIN_DB / (10 * np.log10(np.e)))
+        threshold = max(threshold, LINE_ON_MODE_MIN_DB / (10 * _LOG10_E))
         excess = ctx.lnP[k] - _sdof_expected_log(ctx, mode.fit, k, self.p) - centre
         return bool(excess > threshold)
 
@@ -787,11 +865,11 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
             or max_mesh_order < 0:
         raise SignalError("max_mesh_order", "an integer >= 0", repr(max_mesh_order))
     max_order = int(max_mesh_order)
-    sigma_dB = 10 * np.log10(np.e) * np.sqrt(ctx.eps2)
+    sigma_dB = 10 * _LOG10_E * np.sqrt(ctx.eps2)
     threshold = max(float(prominence_dB), float(min_sigma) * sigma_dB)
-    LdB = 10 * np.log10(np.e) * lnP
+    LdB = 10 * _LOG10_E * lnP
     detect_dB, spread_dB = detection_threshold_db(ctx.dof, b - a + 1, false_alarm)
-    bg_dB = 10 * np.log10(np.e) * _background_log(ctx)
+    bg_dB = 10 * _LOG10_E * _background_log(ctx)
     idx, props = sps.find_peaks(LdB[a: b + 1], prominence=threshold)
     idx = idx + a
     prom = props["prominences"]
@@ -837,6 +915,8 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
             if 0 < k < n - 1 and not line_mask[k]:
                 _main_lobe(ctx, k + int(np.argmax(lnP[k - 1: k + 2])) - 1, line_mask)
     work = _Peaks(ctx, p, fit_span, response, threshold, false_alarm)
+    work.line_bins = _line_bins(ctx, mesh_frequency_Hz, shafts, max_sideband,
+                                max_shaft_harmonic)
     prominence = {int(k): float(v) for k, v in zip(idx, prom, strict=True)}
 
     # pass 1: each peak measured as found, its kind from its width
@@ -877,8 +957,37 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
         _main_lobe(ctx, k, out)
         return out
 
+    joined: set[int] = set()  # peaks reported by a joint fit of two modes
+
+    def add_joint(k: int, prom_k: float, pair: tuple[TwoModeFit, tuple[int, ...]]) -> bool:
+        tm, partners = pair
+        ests = _joint_estimates(ctx, tm, response)
+        others = [q for q in modes if q.index not in partners]
+        if any(_known(e, others) for e in ests):
+            return False  # a mode reported already: the pair is not two new modes
+        joined.update((k, *partners))
+        # a partner reported already (its own fit unflagged) is one of the two modes now
+        modes[:] = [q for q in modes if q.index not in partners
+                    or (q.mode is not None and q.mode.joint is not None)]
+        near = {j: prominence[j] for j in (k, *partners)}
+        near[k] = prom_k
+        for est in ests:
+            d, j = min((abs(ctx.f[j] - est.f_n_Hz), j) for j in near)
+            prom = near[j] if d <= est.zeta * est.f_n_Hz else prom_k
+            modes.append(_mode_peak(ctx, est, prom, locate))
+        return True
+
     for k, fk, fstd, lnk, loc, mode, kind in first_pass:
+        if k in joined:
+            continue
         if kind != "structural":
+            # a merged peak of two modes can lie off its one-mode fit's f_n: not broad
+            if kind == "unresolved" and loc.kind is None:
+                own = np.zeros(n, bool)
+                mask_line(ctx, k, own)
+                pair = work.two_modes(k, mode, limits, all_lines & ~own, locate, joined)
+                if pair is not None:
+                    add_joint(k, prominence[k], pair)
             continue
         own = np.zeros(n, bool)
         mask_line(ctx, k, own)
@@ -901,10 +1010,13 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
             modes.append(_mode_peak(ctx, *under, locate))
             continue
         prom_k = max(prominence[k], work.prominence_without_lines(k, mask))
+        pair = work.two_modes(k, mode, limits, mask, locate, joined)
+        if pair is not None and add_joint(k, prom_k, pair):
+            continue
         modes.append(Peak(index=k, f_Hz=fk, f_std_Hz=fstd, psd_per_Hz=float(np.exp(lnk)),
                           prominence_dB=prom_k, kind=kind, location=loc, mode=mode))
     for k, fk, fstd, lnk, loc, mode, kind in first_pass:
-        if kind == "structural":
+        if kind == "structural" or k in joined:
             continue
         peaks.append(Peak(index=k, f_Hz=fk, f_std_Hz=fstd, psd_per_Hz=float(np.exp(lnk)),
                           prominence_dB=prominence[k], kind=kind, location=loc, mode=mode))
@@ -930,6 +1042,95 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
                         shaft_frequencies_Hz=shafts, tolerance_Hz=atol, rtol=float(rtol),
                         threshold_dB=threshold, detection_threshold_dB=detect_dB,
                         false_alarm=float(false_alarm), max_mesh_order=max_order)
+
+
+def _joint_estimates(ctx: PSDContext, tm: TwoModeFit, response: str
+                     ) -> tuple[ModalEstimate, ModalEstimate]:
+    """The two modes of an accepted joint fit as modal estimates (``f_peak_Hz`` = f_n)."""
+    nan = float("nan")
+    hp = HalfPower(nan, nan, nan, nan, message="not measured: the peak holds two modes, "
+                   "fitted jointly")
+    out = []
+    for i, fit in enumerate(tm.modes):
+        other = tm.modes[1 - i]
+        at = np.array([fit.f_n_Hz])
+        psd = (fit.peak_psd_per_Hz + fit.background_per_Hz + other.peak_psd_per_Hz
+               * float(sdof_shape(at, other.f_n_Hz, other.zeta, RESPONSE_POWER[response])[0][0]))
+        out.append(ModalEstimate(
+            f_n_Hz=fit.f_n_Hz, f_n_std_Hz=fit.f_n_std_Hz, zeta=fit.zeta, zeta_std=fit.zeta_std,
+            zeta_half_power=nan, zeta_half_power_std=nan, f_peak_Hz=fit.f_n_Hz,
+            f_peak_std_Hz=fit.f_n_std_Hz, psd_peak_per_Hz=float(psd),
+            zeta_resolution=zeta_resolution(ctx, fit.f_n_Hz), fit=fit, half_power=hp,
+            response=response, dof=ctx.dof, resolution_Hz=ctx.df,
+            mainlobe_half_width_Hz=ctx.props.mainlobe_half_width_bins * ctx.df, joint=tm))
+    return out[0], out[1]
+
+
+def _line_bins(ctx: PSDContext, mesh_frequency_Hz: float | None, shafts: Sequence[float],
+               max_sideband: int, max_shaft_harmonic: int) -> np.ndarray:
+    """Bins of every mesh harmonic below Nyquist with its sidebands, and the shaft harmonics."""
+    f_top = float(ctx.f[-1])
+    out: list[float] = []
+    if mesh_frequency_Hz is not None and mesh_frequency_Hz > 0:
+        h = np.arange(1, int(f_top // mesh_frequency_Hz) + 1) * float(mesh_frequency_Hz)
+        out += list(h)
+        for fs_ in shafts:
+            for j in range(1, max_sideband + 1):
+                out += list(h - j * fs_) + list(h + j * fs_)
+    for fs_ in shafts:
+        out += [k * fs_ for k in range(1, max_shaft_harmonic + 1)]
+    k = np.round(np.asarray(out, np.float64) / ctx.df).astype(np.int64)
+    return np.unique(k[(k > 0) & (k < ctx.f.size - 1)])
+
+
+def _mask_standing_lines(ctx: PSDContext, line_bins: np.ndarray, a: int, b: int,
+                         mask: np.ndarray) -> np.ndarray:
+    r"""``mask`` with the main lobes of the mesh and shaft lines that stand out in ``[a, b]``.
+
+    A line of any order stands out when the PSD at its bin (or a neighbour) exceeds the median
+    of the bins 3 to 16 away (other lines' bins left out) by the one-sided
+    ``LINE_STAND_OUT_FALSE_ALARM`` quantile of the Welch estimate (:math:`\chi^2_\nu/\nu`):
+    the joint fit of two modes would otherwise take a cluster of weak lines with their
+    sidebands for a second mode. A mode's smooth top does not stand out so; the lines are
+    masked only there, for the joint fit.
+    """
+    out = mask.copy()
+    nu = max(ctx.dof, 1.0)
+    lim = float(np.log(chi2.isf(LINE_STAND_OUT_FALSE_ALARM, nu) / nu)
+                - np.log(chi2.median(nu) / nu))
+    near_line = np.zeros(ctx.f.size, bool)  # the ring about a line leaves the other lines out
+    for k in line_bins:
+        near_line[max(int(k) - 2, 0): int(k) + 3] = True
+    for k in line_bins[(line_bins >= a) & (line_bins <= b)]:
+        k = int(k)
+        ring = np.r_[np.arange(k - 16, k - 2), np.arange(k + 3, k + 17)]
+        ring = ring[(ring > 0) & (ring < ctx.f.size)]
+        ring = ring[~near_line[ring]]
+        if ring.size < 4:
+            continue
+        top = k - 1 + int(np.argmax(ctx.lnP[k - 1: k + 2]))
+        if ctx.lnP[top] - float(np.median(ctx.lnP[ring])) > lim:
+            _main_lobe(ctx, top, out)
+    return out
+
+
+def _joint_mode_resolved(mode: ModalEstimate, loc: LocationClass) -> bool:
+    r"""A mode of a joint fit is a mode: its damping beyond the resolution limit.
+
+    The fit succeeded, :math:`\zeta - 2\sigma_\zeta > \zeta_\text{res}`
+    (``ZETA_MARGIN_SIGMA``) and the half-power band spans ``MIN_RESOLVED_BINS`` bins; at a
+    mesh or shaft line (``loc``), also :attr:`ModalEstimate.broad` (a line smeared by the
+    speed beside a mode would otherwise pass for a narrow second mode). Away from the lines
+    the width of two main lobes is not asked: the test of the joint fit already says the
+    second mode is there.
+    """
+    if loc.kind is not None:
+        return mode.broad
+    f, z, sz = mode.fit, mode.zeta, mode.zeta_std
+    if not (f.success and not f.at_lower_bound and np.isfinite(z) and np.isfinite(sz)):
+        return False
+    return bool(z - ZETA_MARGIN_SIGMA * sz > mode.zeta_resolution
+                and mode.resolved_bins >= MIN_RESOLVED_BINS)
 
 
 def _known(mode: ModalEstimate, modes: Sequence[Peak]) -> bool:

@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.special import i0
 
+from rigtools.analysis.resample_kernel import kaiser_sinc_apply, kaiser_table
 from rigtools.analysis.signal_checks import (
     as_1d,
     check_int,
@@ -30,10 +30,9 @@ __all__ = ["RESAMPLER_PASSBAND", "AngleSignal", "resample_to_angle"]
 
 #: Fraction of ``min(fs, P f)`` up to which the angular resampler is flat (within ~1e-5).
 RESAMPLER_PASSBAND = 0.42
-_ZEROS = 32  # zero crossings of the kernel on each side
+_ZEROS = 32.0  # zero crossings of the kernel on each side
 _BETA = 10.0  # Kaiser shape
 _CUTOFF = 0.94  # kernel cutoff, fraction of the Nyquist frequency of min(fs, P f)
-_CHUNK_TAPS = 1 << 21  # outputs x taps evaluated at once (memory bound of the resampler)
 
 
 # --- results ----------------------------------------------------------------------------------
@@ -84,34 +83,6 @@ class AngleSignal:
 
 
 # --- angular resampling -----------------------------------------------------------------------
-def _kernel_apply(xr: np.ndarray, u: np.ndarray, rho: np.ndarray) -> np.ndarray:
-    """Windowed-sinc values of ``xr`` at fractional positions ``u`` with cutoffs ``rho``.
-
-    ``xr`` is one gap-free run; every kernel must lie inside it (checked by the caller).
-    """
-    out = np.empty(u.size)
-    i = 0
-    last = xr.size - 1
-    while i < u.size:
-        k0 = int(np.ceil(_ZEROS / rho[i]))
-        rows = max(1, _CHUNK_TAPS // (2 * k0 + 2))
-        sl = slice(i, min(u.size, i + rows))
-        uu, rr = u[sl], rho[sl]
-        kmax = int(np.ceil(_ZEROS / rr.min()))
-        offs = np.arange(-kmax + 1, kmax + 1)
-        base = np.floor(uu).astype(np.int64)
-        idx = base[:, None] + offs[None, :]
-        tau = uu[:, None] - idx
-        xw = (rr[:, None] * tau) / _ZEROS
-        inside = np.abs(xw) < 1.0
-        w = np.where(inside, i0(_BETA * np.sqrt(np.clip(1.0 - xw * xw, 0.0, None))), 0.0)
-        h = np.sinc(_CUTOFF * rr[:, None] * tau) * w
-        h /= h.sum(axis=1, keepdims=True)
-        out[sl] = np.einsum("ij,ij->i", h, xr[np.clip(idx, 0, last)])
-        i = sl.stop
-    return out
-
-
 def resample_to_angle(
     x: np.ndarray,
     sample_rate_Hz: float,
@@ -181,6 +152,7 @@ def resample_to_angle(
     rho_all = np.minimum(1.0, p * np.where(known, f, 0.0) / fs)
     ang, val, tim, spd, run = [], [], [], [], []
     run_end: list[str] = []
+    window = kaiser_table(_BETA)
     for a, b in true_runs(usable):
         th = theta[a:b]
         j0 = int(np.ceil(th[0] * p - 1e-9))
@@ -204,7 +176,8 @@ def resample_to_angle(
         for q, (ka, kb) in enumerate(pieces):
             uu = u[ka:kb]
             ang.append(j[ka:kb] / p)
-            val.append(_kernel_apply(xs[a:b], uu, rho[ka:kb]))
+            val.append(kaiser_sinc_apply(np.ascontiguousarray(xs[a:b]), uu, rho[ka:kb], _ZEROS,
+                                         _CUTOFF, window))
             tim.append(t[0] + (a + uu) / fs)
             spd.append(60.0 * np.interp(uu, np.arange(b - a, dtype=np.float64), f[a:b]))
             run.append(np.full(kb - ka, len(run_end), dtype=np.int64))

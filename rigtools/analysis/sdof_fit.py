@@ -43,7 +43,9 @@ what a correct model reaches with probability :data:`MISFIT_FALSE_ALARM`
 ``band_too_narrow`` when the band reaches fewer than :data:`MIN_COVER` half-power half-widths
 from f_n on a side (at one half-width zeta came out 4.6 % low, half its standard error; at
 two, unbiased); ``unresolved`` when the half-power band is narrower than the window's 3 dB
-bandwidth (:data:`MIN_RESOLVED_WIDTH`); ``at_lower_bound`` (a tone) and ``fit_failed``.
+bandwidth (:data:`MIN_RESOLVED_WIDTH`); ``at_lower_bound`` (a tone) and ``fit_failed``; and
+``joint_fit`` on each of two close modes fitted together
+(:mod:`rigtools.analysis.two_mode_fit`, set there).
 
 References
 ----------
@@ -83,6 +85,7 @@ __all__ = [
     "mask_line",
     "misfit_threshold",
     "not_fitted",
+    "sdof_shape",
     "zeta_resolution",
 ]
 
@@ -114,6 +117,7 @@ FIT_FLAGS: Final[dict[str, str]] = {
               "more than one SDOF response on a white background",
     "band_too_narrow": "the band fitted reaches too few half-power half-widths from the peak",
     "unresolved": "the half-power band is narrower than the window's 3 dB bandwidth",
+    "joint_fit": "fitted jointly with a mode within two half-power bandwidths",
 }
 #: Least half-width of the fitted band: bins, and multiples of the window's 3 dB bandwidth.
 MIN_FIT_HALF_BINS = 16
@@ -399,9 +403,27 @@ def half_power_in_band(ctx: PSDContext, k0: int, lo: int, hi: int, mask: np.ndar
     return smooth if np.isfinite(smooth.zeta) else raw
 
 
-def _sdof_shape(fe: np.ndarray, f_n: float, zeta: float, p: int
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """SDOF PSD shape s (1 at f_n) and its derivatives with respect to ln f_n and ln zeta."""
+def sdof_shape(fe: np.ndarray, f_n: float, zeta: float, p: int
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    r"""SDOF PSD shape and its derivatives with respect to :math:`\ln f_n` and :math:`\ln\zeta`.
+
+    Parameters
+    ----------
+    fe : numpy.ndarray
+        Frequencies (Hz), any shape.
+    f_n : float
+        Natural frequency (Hz).
+    zeta : float
+        Damping ratio.
+    p : int
+        Response power (0, 1, 2: displacement, velocity, acceleration).
+
+    Returns
+    -------
+    s, ds_f, ds_z : numpy.ndarray
+        :math:`s = (2\zeta)^2 r^{2p} / ((1 - r^2)^2 + (2\zeta r)^2)`, :math:`r = f/f_n`
+        (1 at :math:`f_n`), and its derivatives.
+    """
     r2 = (fe / f_n) ** 2
     z2 = zeta * zeta
     D = (1 - r2) ** 2 + 4 * z2 * r2
@@ -462,7 +484,7 @@ def fit_sdof_in_band(ctx: PSDContext, k0: int, lo: int, hi: int, mask: np.ndarra
             return hit
         f_n, zeta, W = np.exp(th[:3])
         c = W / (np.pi * zeta * f_n)
-        s, ds_f, ds_z = _sdof_shape(fe, f_n, zeta, p)
+        s, ds_f, ds_z = sdof_shape(fe, f_n, zeta, p)
         Sk, Sf, Sz = s @ kern, ds_f @ kern, ds_z @ kern
         M = np.maximum(c * Sk + th[3] * B_ref, M_floor)
         dM = np.column_stack([c * (Sf - Sk), c * (Sz - Sk), c * Sk, np.full_like(Sk, B_ref)])
@@ -507,7 +529,7 @@ def fit_sdof_in_band(ctx: PSDContext, k0: int, lo: int, hi: int, mask: np.ndarra
     c_fit, B_fit = W / (np.pi * zeta * f_n), float(th[3] * B_ref)
 
     def psd_of_bin(g: np.ndarray) -> np.ndarray:  # the fitted PSD, before the window
-        return c_fit * _sdof_shape(np.abs(g) * df, f_n, zeta, p)[0] + B_fit
+        return c_fit * sdof_shape(np.abs(g) * df, f_n, zeta, p)[0] + B_fit
 
     # covariance of the log estimates for the fitted spectrum (the correlation of
     # neighbouring bins depends on how the PSD changes within the window's main lobe)

@@ -38,6 +38,15 @@ Options: a second mode within a few half-power bandwidths (:func:`close_pair`), 
 harmonics with sidebands (:class:`Mesh`: tones at :math:`h f_m \pm k f_\text{shaft}`), and
 additive white noise at a stated SNR.
 
+**One force or one per mode.** By default (``forces="common"``) one force drives every mode
+and the responses add as complex FRFs, :math:`|\sum_j H_j|^2 S_F` (modes of one structure
+under one excitation: between two close modes of the same sign the receptances are out of
+phase and the PSD dips below the sum of the two). With ``forces="independent"`` each mode is
+driven by its own white force of the same PSD, drawn one after the other, and the PSD is the
+sum :math:`\sum_j |H_j|^2 S_F`: two uncorrelated sources, such as a gear-mesh mode and a
+housing mode excited by different forces (the demo campaign's case), and the model the
+two-mode fit of :mod:`rigtools.analysis.two_mode_fit` assumes.
+
 **SNR** (dB) is :math:`10\log_{10}(\overline{x_\text{modes}^2} / \sigma_\text{noise}^2)`:
 the expected mean square of the noise-free modal response (all modes, without the mesh
 tones; the continuous FRF integrated from 0 to :math:`f_s/2`) over the variance of the
@@ -61,6 +70,7 @@ from scipy import signal as sps
 __all__ = [
     "FS_HZ",
     "RESPONSE_POWER",
+    "Forces",
     "Mesh",
     "ModalSignal",
     "ModalTruth",
@@ -72,10 +82,13 @@ __all__ = [
     "frf",
     "matched_z_filter",
     "mean_square",
+    "modal_psd_shape",
+    "pair_with_psd_ratio",
     "time_domain_signal",
 ]
 
 Response = Literal["displacement", "velocity", "acceleration"]
+Forces = Literal["common", "independent"]
 #: Power of :math:`i\omega` that turns the receptance into the response.
 RESPONSE_POWER: dict[str, int] = {"displacement": 0, "velocity": 1, "acceleration": 2}
 #: The rig's sample rate (Hz).
@@ -178,7 +191,10 @@ class ModalTruth:
         without noise).
     force_psd : float
         One-sided PSD of the force that makes the modal response (force unit^2/Hz), after
-        scaling to ``signal_rms``: the PSD of the modal response is ``|frf|^2 * force_psd``.
+        scaling to ``signal_rms``: the PSD of the modal response is ``|frf|^2 * force_psd``
+        (with independent forces, the sum of each mode's ``|frf|^2`` times it).
+    independent : bool
+        Each mode driven by its own force (module docstring).
     """
 
     modes: tuple[Mode, ...]
@@ -193,6 +209,7 @@ class ModalTruth:
     tones: tuple[tuple[float, float], ...]
     peak_to_floor_dB: tuple[float, ...]
     force_psd: float
+    independent: bool = False
 
     @property
     def f_n_Hz(self) -> float:
@@ -267,34 +284,66 @@ def frf(f_Hz: np.ndarray | float, modes: Sequence[Mode], response: str) -> np.nd
     return h * (1j * w) ** p
 
 
-def mean_square(modes: Sequence[Mode], response: str, fs_Hz: float, n_grid: int = 400_001
-                ) -> float:
-    r""":math:`\int_0^{f_s/2} |H(f)|^2 df` per unit one-sided force PSD (trapezoid)."""
+def mean_square(modes: Sequence[Mode], response: str, fs_Hz: float, n_grid: int = 400_001,
+                independent: bool = False) -> float:
+    r""":math:`\int_0^{f_s/2} |H(f)|^2 df` per unit one-sided force PSD (trapezoid).
+
+    With ``independent`` forces, :math:`\int \sum_j |H_j|^2 df`.
+    """
     f = np.linspace(0.0, fs_Hz / 2, n_grid)
     # a grid fine against the narrowest mode: at least 40 points per half-power bandwidth
     bw = min(m.half_power_bandwidth_Hz for m in modes)
     if (f[1] - f[0]) * 40 > bw:
         f = np.linspace(0.0, fs_Hz / 2, int(fs_Hz / 2 / bw * 40) + 1)
-    return float(np.trapezoid(np.abs(frf(f, modes, response)) ** 2, f))
+    return float(np.trapezoid(modal_psd_shape(f, modes, response, independent), f))
+
+
+def modal_psd_shape(f_Hz: np.ndarray | float, modes: Sequence[Mode], response: str,
+                    independent: bool = False) -> np.ndarray:
+    r"""PSD of the modal response per unit force PSD.
+
+    :math:`|\sum_j H_j|^2`, or :math:`\sum_j |H_j|^2` with ``independent`` forces (module
+    docstring).
+    """
+    if independent:
+        return np.sum([np.abs(frf(f_Hz, [m], response)) ** 2 for m in modes], axis=0)
+    return np.abs(frf(f_Hz, modes, response)) ** 2
 
 
 def expected_psd(f_Hz: np.ndarray, truth: ModalTruth) -> np.ndarray:
     """PSD of the modal response plus the noise at ``f_Hz`` (unit^2/Hz; no window, no tones)."""
-    return (np.abs(frf(f_Hz, truth.modes, truth.response)) ** 2 * truth.force_psd
-            + truth.noise_psd)
+    return (modal_psd_shape(f_Hz, truth.modes, truth.response, truth.independent)
+            * truth.force_psd + truth.noise_psd)
 
 
 def close_pair(f_n_Hz: float = 2843.0, zeta: float = 0.03, separation_bw: float = 2.0,
-               relative_level: float = 1.0) -> tuple[Mode, Mode]:
-    """Two modes ``separation_bw`` half-power bandwidths apart (the second above).
+               relative_level: float = 1.0, zeta2: float | None = None) -> tuple[Mode, Mode]:
+    r"""Two modes ``separation_bw`` half-power bandwidths apart (the second above).
 
-    ``relative_level`` is the ratio of the second mode's receptance peak to the first's.
+    ``relative_level`` is the ratio of the second mode's receptance peak to the first's;
+    ``zeta2`` the second mode's damping (default ``zeta``). The separation is in half-power
+    bandwidths :math:`2\zeta f_n` of the first mode.
     """
     first = Mode(f_n_Hz, zeta)
     f2 = f_n_Hz + separation_bw * first.half_power_bandwidth_Hz
+    z2 = zeta if zeta2 is None else float(zeta2)
     # receptance peak ~ 1 / (2 zeta k): scale k
-    second = Mode(f2, zeta, stiffness=1.0 / relative_level)
+    second = Mode(f2, z2, stiffness=zeta / (z2 * relative_level))
     return first, second
+
+
+def pair_with_psd_ratio(f1_Hz: float, zeta1: float, f2_Hz: float, zeta2: float,
+                        psd_ratio: float, response: str) -> tuple[Mode, Mode]:
+    r"""Two modes whose own response PSDs peak in the ratio ``psd_ratio`` (second over first).
+
+    The peak of :math:`|H_j|^2` of a mode's response is :math:`(2\pi f_j)^{2p} / (2\zeta_j
+    k_j)^2` (at :math:`f_j`, to first order in zeta): the second mode's stiffness is set so.
+    """
+    p = _check_response(response)
+    first = Mode(f1_Hz, zeta1)
+    peak1 = (2 * np.pi * f1_Hz) ** (2 * p) / (2 * zeta1) ** 2
+    k2 = np.sqrt((2 * np.pi * f2_Hz) ** (2 * p) / (2 * zeta2) ** 2 / (psd_ratio * peak1))
+    return first, Mode(f2_Hz, zeta2, stiffness=float(k2))
 
 
 # --------------------------------------------------------------------------------------------
@@ -307,9 +356,16 @@ def _rng(rng: np.random.Generator | int | None) -> tuple[np.random.Generator, in
     return np.random.default_rng(rng), rng
 
 
+def _check_forces(forces: str) -> bool:
+    if forces not in ("common", "independent"):
+        raise ValueError(f"`forces` must be 'common' or 'independent', was {forces!r}")
+    return forces == "independent"
+
+
 def _finish(modal: np.ndarray, modes: tuple[Mode, ...], response: str, route: str,
             fs_Hz: float, rng: np.random.Generator, seed: int | None, signal_rms: float,
-            scale: float, snr_dB: float | None, mesh: Mesh | None) -> ModalSignal:
+            scale: float, snr_dB: float | None, mesh: Mesh | None,
+            independent: bool = False) -> ModalSignal:
     n = modal.size
     t = np.arange(n) / fs_Hz
     x = modal.copy()
@@ -326,19 +382,20 @@ def _finish(modal: np.ndarray, modes: tuple[Mode, ...], response: str, route: st
         x += rng.normal(0.0, noise_rms, n)
     force_psd = scale**2 * 2.0 / fs_Hz  # unit-variance force samples, scaled
     floor = 2 * noise_rms**2 / fs_Hz
-    peak = [float(np.abs(frf(m.f_n_Hz, modes, response)) ** 2 * force_psd) for m in modes]
+    peak = [float(modal_psd_shape(m.f_n_Hz, modes, response, independent) * force_psd)
+            for m in modes]
     p2f = tuple(10 * np.log10(p / floor) if floor > 0 else float("inf") for p in peak)
     truth = ModalTruth(modes=modes, response=response, route=route, fs_Hz=fs_Hz,
                        duration_s=n / fs_Hz, seed=seed, signal_rms=signal_rms, snr_dB=snr_dB,
                        noise_rms=noise_rms, tones=tuple(tones), peak_to_floor_dB=p2f,
-                       force_psd=force_psd)
+                       force_psd=force_psd, independent=independent)
     return ModalSignal(x=x, truth=truth, modal=modal)
 
 
 def frequency_domain_signal(modes: Sequence[Mode], response: str = "acceleration", *,
                             fs_Hz: float = FS_HZ, duration_s: float = 20.0,
                             snr_dB: float | None = 20.0, mesh: Mesh | None = None,
-                            signal_rms: float = 1.0,
+                            signal_rms: float = 1.0, forces: Forces = "common",
                             rng: np.random.Generator | int | None = None) -> ModalSignal:
     """Route (a): white force, FFT, times the continuous FRF per bin, inverse FFT.
 
@@ -356,8 +413,10 @@ def frequency_domain_signal(modes: Sequence[Mode], response: str = "acceleration
         Mesh tones to add.
     signal_rms : float
         Expected RMS of the modal response (signal unit).
+    forces : {'common', 'independent'}
+        One force for all modes, or one per mode (module docstring).
     rng : numpy.random.Generator, int or None
-        Randomness (force, tone phases, noise, in that order).
+        Randomness (force(s), tone phases, noise, in that order).
 
     Returns
     -------
@@ -365,23 +424,29 @@ def frequency_domain_signal(modes: Sequence[Mode], response: str = "acceleration
     """
     modes = tuple(modes)
     _check_response(response)
+    independent = _check_forces(forces)
     gen, seed = _rng(rng)
     n = round(duration_s * fs_Hz)
-    force = gen.standard_normal(n)
     f = np.fft.rfftfreq(n, 1.0 / fs_Hz)
-    h = frf(f, modes, response)
-    if n % 2 == 0:
-        h[-1] = h[-1].real  # the Nyquist bin of a real signal is real
+    groups = [(m,) for m in modes] if independent else [modes]
+    spectra = []
+    ms = 0.0
     # exact expected mean square of this construction (Parseval over the full FFT)
     weight = np.full(f.size, 2.0)
     weight[0] = 1.0
     if n % 2 == 0:
         weight[-1] = 1.0
-    ms = float(np.sum(weight * np.abs(h) ** 2)) / n
+    for group in groups:
+        force = gen.standard_normal(n)
+        h = frf(f, group, response)
+        if n % 2 == 0:
+            h[-1] = h[-1].real  # the Nyquist bin of a real signal is real
+        ms += float(np.sum(weight * np.abs(h) ** 2)) / n
+        spectra.append(np.fft.rfft(force) * h)
     scale = signal_rms / np.sqrt(ms)
-    modal = np.fft.irfft(np.fft.rfft(force) * h, n) * scale
+    modal = np.fft.irfft(np.sum(spectra, axis=0), n) * scale
     return _finish(modal, modes, response, "frequency", fs_Hz, gen, seed, signal_rms, scale,
-                   snr_dB, mesh)
+                   snr_dB, mesh, independent)
 
 
 def matched_z_filter(mode: Mode, response: str, fs_Hz: float) -> tuple[np.ndarray, np.ndarray]:
@@ -407,12 +472,13 @@ def time_domain_signal(modes: Sequence[Mode], response: str = "acceleration", *,
                        fs_Hz: float = FS_HZ, duration_s: float = 20.0,
                        snr_dB: float | None = 20.0, mesh: Mesh | None = None,
                        signal_rms: float = 1.0, oversample: int = 8,
+                       forces: Forces = "common",
                        rng: np.random.Generator | int | None = None) -> ModalSignal:
     """Route (b): white force through the modes' matched-z filters, then decimated.
 
     Parameters
     ----------
-    modes, response, fs_Hz, duration_s, snr_dB, mesh, signal_rms, rng
+    modes, response, fs_Hz, duration_s, snr_dB, mesh, signal_rms, forces, rng
         As for :func:`frequency_domain_signal`.
     oversample : int
         The filters run at ``oversample * fs_Hz`` (module docstring); 1: at the output rate,
@@ -424,6 +490,7 @@ def time_domain_signal(modes: Sequence[Mode], response: str = "acceleration", *,
     """
     modes = tuple(modes)
     _check_response(response)
+    independent = _check_forces(forces)
     gen, seed = _rng(rng)
     q = int(oversample)
     fs_o = fs_Hz * q
@@ -434,7 +501,9 @@ def time_domain_signal(modes: Sequence[Mode], response: str = "acceleration", *,
     # a force with the same one-sided PSD (2 / fs_Hz) as route (a)'s unit-variance samples
     force = gen.standard_normal(n_o) * np.sqrt(q)
     y = np.zeros(n_o)
-    for m in modes:
+    for i, m in enumerate(modes):
+        if independent and i > 0:
+            force = gen.standard_normal(n_o) * np.sqrt(q)
         b, a = matched_z_filter(m, response, fs_o)
         y += sps.lfilter(b, a, force)
     if q > 1:
@@ -442,7 +511,8 @@ def time_domain_signal(modes: Sequence[Mode], response: str = "acceleration", *,
         taps = sps.firwin(32 * q + 1, 1.0 / q, window=("kaiser", 9.0))
         y = sps.resample_poly(y, 1, q, window=taps)
     modal = y[settle: settle + n]
-    scale = signal_rms / np.sqrt(mean_square(modes, response, fs_Hz) * 2.0 / fs_Hz)
+    scale = signal_rms / np.sqrt(mean_square(modes, response, fs_Hz, independent=independent)
+                                 * 2.0 / fs_Hz)
     modal = modal * scale
     return _finish(modal, modes, response, "time", fs_Hz, gen, seed, signal_rms, scale,
-                   snr_dB, mesh)
+                   snr_dB, mesh, independent)
