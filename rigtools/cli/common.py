@@ -20,11 +20,13 @@ __all__ = [
     "EXIT_OK",
     "EXIT_UNUSABLE",
     "EXIT_USAGE",
+    "PROGRESS_MIN_BYTES",
     "add_read_options",
     "fail",
     "one_line",
     "output_problem",
     "read_from_args",
+    "stderr_is_terminal",
     "warn_losses",
 ]
 
@@ -34,6 +36,8 @@ EXIT_OK: Final = 0
 EXIT_USAGE: Final = 2
 #: The input is unusable: a rigtools or model error names the file, the position and the cause.
 EXIT_UNUSABLE: Final = 3
+#: Files from this size on (bytes) are read with a progress bar when stderr is a terminal.
+PROGRESS_MIN_BYTES: Final = 16 << 20
 
 
 def add_read_options(p: argparse.ArgumentParser) -> None:
@@ -48,8 +52,34 @@ def add_read_options(p: argparse.ArgumentParser) -> None:
 
 
 def read_from_args(args: argparse.Namespace) -> Recording:
-    """Read ``args.file`` with the common options."""
-    return read(args.file, dbc=args.dbc, mapping=args.mapping, fmt=args.fmt)
+    """Read ``args.file`` with the common options; a progress bar for a long file.
+
+    The bar (tqdm, bytes of the file read) shows on stderr when it is a terminal and the file
+    holds at least :data:`PROGRESS_MIN_BYTES`.
+    """
+    path = Path(args.file)
+    try:
+        big = path.is_file() and path.stat().st_size >= PROGRESS_MIN_BYTES
+    except OSError:
+        big = False
+    if not (big and stderr_is_terminal()):
+        return read(path, dbc=args.dbc, mapping=args.mapping, fmt=args.fmt)
+    from tqdm import tqdm
+
+    with tqdm(total=path.stat().st_size, desc=f"reading {path.name}", unit="B",
+              unit_scale=True, unit_divisor=1024, file=sys.stderr, leave=False) as bar:
+        def update(done: int, total: int) -> None:
+            bar.update(done - bar.n)
+
+        return read(path, dbc=args.dbc, mapping=args.mapping, fmt=args.fmt, progress=update)
+
+
+def stderr_is_terminal() -> bool:
+    """Whether stderr is a terminal (progress bars) rather than a file or a pipe."""
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        return False
 
 
 def output_problem(path: str | Path, *, folder: bool = False) -> str | None:

@@ -16,11 +16,14 @@ import argparse
 import os
 import sys
 from pathlib import Path
-from typing import Any, Final
+from typing import TYPE_CHECKING, Any, Final
 
 from rigtools.cli.arguments import float_in_range, int_at_least
-from rigtools.cli.common import fail, output_problem
+from rigtools.cli.common import fail, output_problem, stderr_is_terminal
 from rigtools.cli.run import add_pipeline_options, run_pipeline
+
+if TYPE_CHECKING:
+    from rigtools.demo.campaign import DemoRun
 
 __all__ = ["MAX_DURATION_S", "MIN_DURATION_S", "add_parser", "run"]
 
@@ -66,13 +69,27 @@ def run(args: argparse.Namespace) -> int:
     problem = output_problem(out, folder=True)
     if problem:
         return fail(problem)
-    from rigtools.demo.campaign import generate_demo_campaign
+    from tqdm import tqdm
+
+    from rigtools.demo.campaign import demo_conditions, generate_demo_campaign
 
     if not args.quiet:
         print(f"rigtools: generating the demo campaign ({args.size}) in {out / 'campaign'}",
               file=sys.stderr)
-    demo = generate_demo_campaign(out / "campaign", seed=args.seed, size=args.size,
-                                  duration_s=args.duration)
+    n_runs = len(demo_conditions(args.size))
+    bar = tqdm(total=n_runs, desc="generate", unit="run", file=sys.stderr,
+               disable=args.quiet or not stderr_is_terminal())
+
+    def on_run(run: DemoRun) -> None:
+        bar.update(1)
+        bar.set_postfix_str(f"{run.run_id} ({run.format})", refresh=True)
+        if bar.disable and not args.quiet:
+            print(f"rigtools: generate [{bar.n}/{n_runs}] {run.run_id}: {run.file.name}",
+                  file=sys.stderr)
+
+    with bar:
+        demo = generate_demo_campaign(out / "campaign", seed=args.seed, size=args.size,
+                                      duration_s=args.duration, on_run=on_run)
     code = run_pipeline(args, demo.campaign_path, out / "results", truth=demo.truth_path)
     if not args.quiet:
         print(f"\nthe campaign file: {demo.campaign_path} (edit it, or point a copy at your "

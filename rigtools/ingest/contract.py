@@ -13,6 +13,7 @@ Readers that decode a byte stream into a :class:`~rigtools.ingest.builder.Record
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
@@ -42,6 +43,10 @@ class ReadRequest:
         Refuse DBCs with overlapping or oversized signals (cantools ``strict``).
     mcap_clock : {"header", "log_time"}
         MCAP only: the clock that places channels whose messages carry a header stamp.
+    progress : callable or None
+        ``progress(bytes_read, file_bytes)`` a few times a second while a stream reader
+        decodes (from another thread), and once at the end; readers that load the file whole
+        (Parquet) call it once at the end.
     """
 
     dbc: str | Path | None = None
@@ -49,6 +54,7 @@ class ReadRequest:
     metadata: RunMetadata | None = None
     strict_dbc: bool = True
     mcap_clock: str = "header"
+    progress: Callable[[int, int], None] | None = None
 
 
 class RecordingReader(Protocol):

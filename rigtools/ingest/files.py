@@ -11,12 +11,35 @@ import gzip
 import hashlib
 import io
 import zlib
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any, BinaryIO
 
 from rigtools.ingest.recording import IngestReport
 
-__all__ = ["open_source", "sha256_of"]
+__all__ = ["TrackedFile", "open_source", "sha256_of"]
+
+
+class TrackedFile(io.BufferedReader):
+    """A buffered recording file that says how far into the file on disk it has been read.
+
+    For progress displays, polled from another thread while a reader works. A reader that
+    reads at positions (``os.pread``, the MCAP container) instead of moving the stream sets
+    :attr:`position_probe`; a gzip file is measured at its compressed offset.
+    """
+
+    #: The reader's own position in the file (bytes), when ``tell()`` is not it.
+    position_probe: Callable[[], int] | None = None
+
+    def consumed(self) -> int:
+        """Bytes of the file on disk read so far (approximately, for display)."""
+        probe = self.position_probe
+        if probe is not None:
+            return int(probe())
+        raw = self.raw
+        if isinstance(raw, _GuardedGzip):
+            return raw.compressed_position()
+        return self.tell()
 
 
 def sha256_of(path: Path) -> tuple[str, int]:
@@ -73,6 +96,14 @@ class _GuardedGzip(io.RawIOBase):
         self._pos += n
         return n
 
+    def compressed_position(self) -> int:
+        """Bytes of the gzip file read so far."""
+        fileobj = getattr(self._gz, "fileobj", None)
+        try:
+            return int(fileobj.tell()) if fileobj is not None else 0
+        except (OSError, ValueError):
+            return 0
+
     def close(self) -> None:
         self._gz.close()
         super().close()
@@ -81,5 +112,5 @@ class _GuardedGzip(io.RawIOBase):
 def open_source(path: Path, report: IngestReport | None = None) -> BinaryIO:
     """Open a file for reading, transparently unwrapping gzip (damage counted in ``report``)."""
     if _is_gzip(path):
-        return io.BufferedReader(_GuardedGzip(path, report), 1 << 20)  # type: ignore[return-value]
-    return open(path, "rb")
+        return TrackedFile(_GuardedGzip(path, report), 1 << 20)  # type: ignore[return-value]
+    return TrackedFile(io.FileIO(path, "rb"))  # type: ignore[return-value]

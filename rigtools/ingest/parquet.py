@@ -216,8 +216,12 @@ class ParquetReader:
         return sniff(head)
 
     def read(self, path: Path, request: ReadRequest) -> Recording:
-        """:func:`read_parquet` of the file (``request`` is not used)."""
-        return read_parquet(path)
+        """:func:`read_parquet` of the file (of ``request`` only ``progress``, once at the end)."""
+        rec = read_parquet(path)
+        if request.progress is not None:
+            size = path.stat().st_size
+            request.progress(size, size)
+        return rec
 
 
 #: This format in :data:`rigtools.ingest.registry.READERS`.

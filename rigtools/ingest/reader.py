@@ -8,6 +8,7 @@ reads the file with the options of a :class:`~rigtools.ingest.contract.ReadReque
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 from rigtools.ingest.contract import ReadRequest
@@ -28,6 +29,7 @@ def read(
     fmt: str | None = None,
     strict_dbc: bool = True,
     mcap_clock: str = "header",
+    progress: Callable[[int, int], None] | None = None,
 ) -> Recording:
     """Read a recording file into a :class:`~rigtools.ingest.recording.Recording`.
 
@@ -58,6 +60,9 @@ def read(
         its statistics, its ``start_time_s`` and ``offset_s``, its median offset from the
         clock that placed the channel (s). Slow signals (topic scalars, log time only) are
         unaffected except mapped slow fields, timed by the chosen clock.
+    progress : callable, optional
+        ``progress(bytes_read, file_bytes)``, called a few times a second from another thread
+        while the file is decoded, and once at the end (a progress bar's update).
 
     Returns
     -------
@@ -82,4 +87,5 @@ def read(
         raise ValueError(f"mcap_clock must be 'header' or 'log_time', not {mcap_clock!r}")
     p = Path(path)
     reader = READERS[detect_format(p, fmt)]
-    return reader.read(p, ReadRequest(dbc, mapping, metadata, strict_dbc, mcap_clock))
+    return reader.read(p, ReadRequest(dbc, mapping, metadata, strict_dbc, mcap_clock,
+                                      progress))

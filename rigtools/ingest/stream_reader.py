@@ -11,18 +11,21 @@ provenance and run metadata, and a file holding no data refused.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 import json
 import math
 import re
 import sys
+import threading
 from abc import ABC, abstractmethod
+from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
-from typing import Any, BinaryIO
+from typing import Any, BinaryIO, Final
 
 from rigtools.errors import NoDataError
 from rigtools.ingest.builder import RecordingBuilder
@@ -31,7 +34,10 @@ from rigtools.ingest.files import open_source, sha256_of
 from rigtools.ingest.layout import ChannelMapping, load_mapping
 from rigtools.ingest.recording import IngestReport, Provenance, Recording, RunMetadata
 
-__all__ = ["Decoded", "StreamReader", "versions"]
+__all__ = ["PROGRESS_INTERVAL_S", "Decoded", "StreamReader", "versions"]
+
+#: Time between two progress reports of a read (s).
+PROGRESS_INTERVAL_S: Final = 0.2
 
 # Condition keys carry their unit (data_schemas/run_metadata.schema.json).
 _CONDITION_KEY = re.compile(r"^[a-z][a-z0-9_]*_(Nm|C|K|rpm|Hz|s|m|um|kW|bar|Pa)$")
@@ -157,7 +163,7 @@ class StreamReader(ABC):
             mapping = load_mapping(mapping)
         report = IngestReport(units=self.units)
         builder = RecordingBuilder(str(p), report)
-        with open_source(p, report) as stream:
+        with open_source(p, report) as stream, _watching(stream, p, request.progress):
             decoded = self.decode(stream, str(p), builder, report, mapping, request)
         meta = _merge_metadata(decoded.metadata, mapping, request.metadata, report)
         # Through JSON once, so the layout compares equal after a Parquet round trip.
@@ -176,6 +182,32 @@ class StreamReader(ABC):
                 f"none ({report.decoded} {report.units} decoded; rejected {reasons})",
             )
         return rec
+
+
+@contextlib.contextmanager
+def _watching(stream: BinaryIO, path: Path, progress: Callable[[int, int], None] | None
+              ) -> Iterator[None]:
+    """Report how far ``stream`` is read, every :data:`PROGRESS_INTERVAL_S`, from a thread."""
+    if progress is None:
+        yield
+        return
+    total = path.stat().st_size
+    consumed = getattr(stream, "consumed", None)
+    stop = threading.Event()
+
+    def watch() -> None:
+        while not stop.wait(PROGRESS_INTERVAL_S):
+            if consumed is not None:
+                progress(min(int(consumed()), total), total)
+
+    watcher = threading.Thread(target=watch, name="rigtools-progress", daemon=True)
+    watcher.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        watcher.join()
+    progress(total, total)
 
 
 def _merge_metadata(

@@ -21,9 +21,33 @@ VOLATILE_COUNTS = ("reused", "computed")
 
 
 def snapshot(out: Path) -> dict[str, bytes]:
-    """Every file of OUTDIR but pipeline.json, by relative path."""
+    """Every file of OUTDIR but pipeline.json and the report, by relative path."""
     return {str(p.relative_to(out)): p.read_bytes() for p in sorted(out.rglob("*"))
-            if p.is_file() and p.name != "pipeline.json"}
+            if p.is_file() and p.name not in ("pipeline.json", "report.json", "report.html")}
+
+
+def _drop(doc: Any, path: list[str]) -> None:
+    """Remove the field at a dotted ``path`` (``*`` matches every key) from ``doc``."""
+    if not isinstance(doc, dict):
+        return
+    head, rest = path[0], path[1:]
+    keys = list(doc) if head == "*" else [head]
+    for k in keys:
+        if k not in doc:
+            continue
+        if rest:
+            _drop(doc[k], rest)
+        else:
+            del doc[k]
+
+
+def without_volatile_report_fields(doc: dict[str, Any]) -> dict[str, Any]:
+    """report.json without the fields its schema lists in ``volatile_fields``."""
+    schema = json.loads((Path(__file__).parents[2] / "data_schemas" / "report.schema.json")
+                        .read_text(encoding="utf-8"))
+    for field in schema["volatile_fields"]:
+        _drop(doc, field.split("."))
+    return doc
 
 
 def stable(doc: Any) -> Any:
@@ -49,7 +73,7 @@ def test_rerun_reuses_everything_and_a_changed_recording_is_redone_alone(
         demo_source: Path, tmp_path: Path) -> None:
     camp = small_campaign(demo_source, tmp_path / "c")
     out = tmp_path / "out"
-    first = run_campaign(camp, out, stages=UP_TO_CALIBRATION, progress=False)
+    first = run_campaign(camp, out, progress=False)
     assert [r.status for r in first.runs] == ["ok"] * 4
     assert first.stages["ingest"]["computed"] == first.stages["observe"]["computed"] == 4
     assert first.calibration_status == "ok" and first.summary is not None
@@ -62,14 +86,20 @@ def test_rerun_reuses_everything_and_a_changed_recording_is_redone_alone(
               "traces.png", "f_n_vs_torque.png", "stiffness_vs_torque.png"):
         assert (out / "calibration" / f).is_file(), f
     before, doc_before = snapshot(out), pipeline_json(out)
+    report_before = json.loads((out / "report.json").read_text(encoding="utf-8"))
 
-    again = run_campaign(camp, out, stages=UP_TO_CALIBRATION, progress=False)
+    again = run_campaign(camp, out, progress=False)
     assert again.stages["ingest"]["reused"] == again.stages["observe"]["reused"] == 4
     assert again.stages["ingest"]["computed"] == again.stages["observe"]["computed"] == 0
     assert again.stages["calibrate"]["reused"] is True
     assert snapshot(out) == before, "a re-run with nothing changed must not change a byte"
     assert stable(pipeline_json(out)) == stable(doc_before)
     assert again.summary == first.summary
+    # the report: identical apart from what its schema marks volatile (issue 19 item 3)
+    report_after = json.loads((out / "report.json").read_text(encoding="utf-8"))
+    assert report_after != report_before                  # generated_at, times, reuse counts
+    assert without_volatile_report_fields(report_after) == \
+        without_volatile_report_fields(report_before)
 
     # another recording of the same run (another seed of the demo): only that run is redone
     other = generate_demo_campaign(tmp_path / "other", size="ci", seed=4, duration_s=1.0)

@@ -81,6 +81,9 @@ class ByteSource:
             self._fd = stream.fileno()
         self.can_peek = self._size is not None and (self._fd is not None
                                                     or isinstance(stream, io.BytesIO))
+        if self._fd is not None and hasattr(stream, "position_probe"):
+            # read at positions, the stream does not move: say where we are (progress display)
+            stream.position_probe = lambda: self._base + self.pos
         self._win = b""
         self._win_pos = 0
 
