@@ -25,8 +25,7 @@ first use: reading a campaign or an observations table does not load the signal 
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from rigtools.campaign.manifest import (
     CONDITION_KEYS,
@@ -51,6 +50,7 @@ from rigtools.campaign.observation_table import (
     to_frame,
 )
 from rigtools.errors import CampaignError
+from rigtools.lazy_exports import lazy_exports
 
 if TYPE_CHECKING:
     from rigtools.campaign.observe import (
@@ -96,14 +96,4 @@ _ON_FIRST_USE = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    module = _ON_FIRST_USE.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, globals(), _ON_FIRST_USE, __all__)

@@ -12,9 +12,9 @@ that only ingests and observes runs does not load the calibration, the figures o
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from rigtools.lazy_exports import lazy_exports
 from rigtools.pipeline.errors import PipelineError
 from rigtools.pipeline.stems import run_file_stem
 
@@ -34,14 +34,4 @@ _ON_FIRST_USE = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    module = _ON_FIRST_USE.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, globals(), _ON_FIRST_USE, __all__)
