@@ -3,10 +3,10 @@
 :class:`Progress` hands out one :class:`StageProgress` per stage. With bars (stderr is a
 terminal, or asked for), each stage gets a tqdm bar on stderr: ingest counts bytes of the
 files read, observe counts runs, calibration counts sampler steps with the current
-autocorrelation time in the postfix. Without bars, every run and every 10 s of sampling
-(:data:`STEP_LOG_INTERVAL_S`) is one ``logging`` line on the ``rigtools.pipeline`` logger
-(INFO), which the command line prints on stderr unless ``--quiet``; ``--verbose`` adds the
-DEBUG lines (cache decisions, keys).
+autocorrelation time in the postfix. Without bars, every run, and every tenth of the step cap
+or 10 s of sampling (:data:`STEP_LOG_INTERVAL_S`), is one ``logging`` line on the
+``rigtools.pipeline`` logger (INFO), which the command line prints on stderr unless
+``--quiet``; ``--verbose`` adds the DEBUG lines (cache decisions, keys).
 """
 
 from __future__ import annotations
@@ -60,6 +60,7 @@ class StageProgress:
         self.items = self.total if items is None else int(items)
         self.done_items = 0
         self._last_line = time.monotonic()
+        self._next_step_line = 0
         self._bar: Any = None
         if bars:
             self._bar = tqdm(total=self.total, desc=stage, unit=unit,
@@ -95,9 +96,12 @@ class StageProgress:
                 self._bar.total = total
             self._bar.n = min(step, total)
             self._bar.set_postfix_str(tau_text, refresh=True)
-        elif step >= total or time.monotonic() - self._last_line >= STEP_LOG_INTERVAL_S:
-            # a log line every few seconds, not at every convergence check (a file is read)
+        elif (step >= total or step >= self._next_step_line
+              or time.monotonic() - self._last_line >= STEP_LOG_INTERVAL_S):
+            # a line per tenth of the step cap or every few seconds, not at every convergence
+            # check (a log file is read by a person)
             self._last_line = time.monotonic()
+            self._next_step_line = (step // max(1, total // 10) + 1) * max(1, total // 10)
             _log.info("%s: step %d/%d (%s)", self.stage, step, total, tau_text)
 
     def note(self, message: str) -> None:
