@@ -24,7 +24,13 @@ from typing import Any, Final, Literal
 
 import numpy as np
 
-from rigtools.analysis.peaks import LOW_DOF, ModalEstimate, PeakAnalysis, analyse_peaks
+from rigtools.analysis.peaks import (
+    LOW_DOF,
+    MAX_MESH_ORDER,
+    ModalEstimate,
+    PeakAnalysis,
+    analyse_peaks,
+)
 from rigtools.analysis.rms import mean_square_time, rms_from_psd
 from rigtools.analysis.sdof_fit import fit_sdof
 from rigtools.analysis.signal_checks import (
@@ -266,8 +272,9 @@ def analyse_recording(rec: Recording, *, channels: Sequence[str] | None = None,
                       shaft_frequencies_Hz: Sequence[float] = (),
                       bands_Hz: Sequence[Sequence[float]] = (), peaks: bool = True,
                       prominence_dB: float = 6.0, f_range_Hz: Sequence[float] | None = None,
-                      max_peaks: int = 20, response: ResponseSpec = None,
-                      clip_min_run: int = 3, full_scale: Sequence[float] | None = None,
+                      max_peaks: int = 20, max_mesh_order: int = MAX_MESH_ORDER,
+                      response: ResponseSpec = None, clip_min_run: int = 3,
+                      full_scale: Sequence[float] | None = None,
                       errors: Literal["flag", "raise"] = "flag") -> RecordingAnalysis:
     """Spectra, RMS, natural frequencies and quality flags of a recording's channels.
 
@@ -284,6 +291,9 @@ def analyse_recording(rec: Recording, *, channels: Sequence[str] | None = None,
         As for :func:`~rigtools.analysis.spectra.welch_psd`.
     mesh_frequency_Hz, shaft_frequencies_Hz, prominence_dB, f_range_Hz, max_peaks
         As for :func:`~rigtools.analysis.peaks.analyse_peaks`.
+    max_mesh_order : int
+        Highest mesh harmonic whose peaks (with their shaft sidebands) are mesh lines, not
+        modes (:func:`~rigtools.analysis.peaks.analyse_peaks`; default 5).
     response : str, mapping or None
         Single-DOF response fitted to the peaks (:data:`ResponseSpec`): ``"displacement"``,
         ``"velocity"`` or ``"acceleration"`` for every channel; a mapping channel ->
@@ -415,13 +425,14 @@ def analyse_recording(rec: Recording, *, channels: Sequence[str] | None = None,
                             spec, mesh_frequency_Hz=mesh_frequency_Hz,
                             shaft_frequencies_Hz=shaft_frequencies_Hz,
                             prominence_dB=prominence_dB, f_range_Hz=f_range_Hz,
-                            max_peaks=max_peaks)
+                            max_peaks=max_peaks, max_mesh_order=max_mesh_order)
                         source = "guessed"
                     else:
                         pk = analyse_peaks(spec, mesh_frequency_Hz=mesh_frequency_Hz,
                                            shaft_frequencies_Hz=shaft_frequencies_Hz,
                                            prominence_dB=prominence_dB, f_range_Hz=f_range_Hz,
-                                           max_peaks=max_peaks, response=resp)
+                                           max_peaks=max_peaks,
+                                           max_mesh_order=max_mesh_order, response=resp)
                 except SignalError as e:
                     if errors == "raise":
                         raise e.for_channel(name) from e

@@ -180,6 +180,9 @@ class AnalysisSettings:
         Band searched for peaks (Hz); None: the analysis default.
     max_peaks : int
         Most prominent peaks kept per channel.
+    max_mesh_order : int
+        Highest mesh harmonic whose peaks (with shaft sidebands) are classed as mesh lines
+        rather than modes (:func:`rigtools.analysis.peaks.analyse_peaks`).
     response : {'auto', 'displacement', 'velocity', 'acceleration'}
         SDOF response fitted to each peak; ``"auto"`` (default): the one the channel's unit
         names (:func:`rigtools.analysis.recording.response_for_unit`), and for a unit that
@@ -199,6 +202,7 @@ class AnalysisSettings:
     prominence_dB: float = 6.0
     f_range_Hz: tuple[float, float] | None = None
     max_peaks: int = 20
+    max_mesh_order: int = 5
     response: Literal["auto", "displacement", "velocity", "acceleration"] = "auto"
     low_snr_dB: float = 10.0
     revs_per_block: int = 8
@@ -391,7 +395,8 @@ class Campaign:
                         "housing": t.housing},
             "analysis": {"nperseg": a.nperseg, "prominence_dB": a.prominence_dB,
                          "f_range_Hz": None if a.f_range_Hz is None else list(a.f_range_Hz),
-                         "max_peaks": a.max_peaks, "response": a.response,
+                         "max_peaks": a.max_peaks, "max_mesh_order": a.max_mesh_order,
+                         "response": a.response,
                          "low_snr_dB": a.low_snr_dB, "revs_per_block": a.revs_per_block,
                          "min_step_duration_s": a.min_step_duration_s,
                          "step_rel_tolerance": a.step_rel_tolerance},
@@ -624,6 +629,7 @@ def load_campaign(path: str | Path) -> Campaign:
         prominence_dB=float(an.get("prominence_dB", defaults.prominence_dB)),
         f_range_Hz=None if f_range is None else (float(f_range[0]), float(f_range[1])),
         max_peaks=int(an.get("max_peaks", defaults.max_peaks)),
+        max_mesh_order=int(an.get("max_mesh_order", defaults.max_mesh_order)),
         response=an.get("response", defaults.response),
         low_snr_dB=float(an.get("low_snr_dB", defaults.low_snr_dB)),
         revs_per_block=int(an.get("revs_per_block", defaults.revs_per_block)),

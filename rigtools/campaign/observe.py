@@ -99,7 +99,7 @@ from rigtools.analysis.orders import (
     run_up_curve_from_recording,
     step_levels_from_recording,
 )
-from rigtools.analysis.peaks import LINE_KINDS, MAX_MESH_ORDER, Peak, PeakAnalysis
+from rigtools.analysis.peaks import LINE_KINDS, Peak, PeakAnalysis
 from rigtools.analysis.recording import ChannelAnalysis, analyse_recording
 from rigtools.analysis.speed import SpeedProfile, SpeedStep, detect_speed_steps, speed_profile
 from rigtools.campaign.manifest import CONDITION_KEYS, Campaign, CampaignRun
@@ -372,7 +372,8 @@ def _observe_recording(campaign: Campaign, run: CampaignRun, rec: Recording,
     analysis = analyse_recording(
         rec, channels=names, nperseg=a.nperseg, mesh_frequency_Hz=f_mesh,
         shaft_frequencies_Hz=shafts, prominence_dB=a.prominence_dB, f_range_Hz=a.f_range_Hz,
-        max_peaks=a.max_peaks, response=a.response, errors="flag") if names else None
+        max_peaks=a.max_peaks, max_mesh_order=a.max_mesh_order, response=a.response,
+        errors="flag") if names else None
     t0 = min((float(c.time_s[0]) if len(c) else c.start_time_s
               for c in rec.channels.values()), default=0.0)
     steps: tuple[SpeedStep, ...] = ()
@@ -845,7 +846,7 @@ def observations_metadata(campaign: Campaign, runs: Sequence[Mapping[str, Any]]
         "gear": {"name": campaign.gear.name, "z1": campaign.pinion_teeth,
                  "z2": campaign.wheel_teeth},
         "harmonics": list(_HARMONICS),
-        "max_mesh_order": MAX_MESH_ORDER,
+        "max_mesh_order": campaign.analysis.max_mesh_order,
         "flags": FLAGS,
         "versions": versions(),
         "runs": [dict(r) for r in runs],

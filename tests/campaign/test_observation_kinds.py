@@ -190,6 +190,30 @@ def test_a_mesh_line_on_a_mode_has_its_own_row_and_flags_the_mode(line_on_mode, 
         assert all(f in FLAGS for f in flags.split(";") if f)
 
 
+def test_analysis_max_mesh_order_reaches_the_peak_classes(tmp_path):
+    """``[analysis] max_mesh_order = 4``: the tone at mesh harmonic 5 is no mesh line any more.
+
+    Same record as ``line_on_mode``'s accel_1 (a mode at 2 kHz = 5 x 400 Hz with a line on
+    it); with the default (5) the line has its own row (test above), with 4 it has none and
+    the table's metadata says 4.
+    """
+    rng = np.random.default_rng(1)
+    mode = [(2000.0, 0.03, 1.0)]
+    chans = {"accel_1": (accel_signal(mode, 6.0, rng, mesh=False, tones=[(2000.0, 1.0)]), FS,
+                         "m/s^2", 0, T0)}
+    write_accel_mcap(tmp_path / "L.mcap", chans, None, None)
+    text = campaign_toml(["L"], accel='["accel_1"]').replace(
+        'response = "acceleration"\n', 'response = "acceleration"\nmax_mesh_order = 4\n')
+    (tmp_path / "c.toml").write_text(text)
+    camp = load_campaign(tmp_path / "c.toml")
+    assert camp.analysis.max_mesh_order == 4
+    obs = observe_campaign(camp)
+    df = obs.table
+    assert not (df.quantity == "line").any()
+    assert not any("mesh harmonic 5" in (m or "") for m in df.message)
+    assert obs.metadata["max_mesh_order"] == 4
+
+
 # --------------------------------------------------------------------------------------------
 # the time base of a per-sample MCAP stream
 
