@@ -80,12 +80,15 @@ def run(args: argparse.Namespace) -> int:
     bar = tqdm(total=n_runs, desc="generate", unit="run", file=sys.stderr,
                disable=args.quiet or not stderr_is_terminal())
 
+    written: list[str] = []          # a disabled tqdm bar does not count
+
     def on_run(run: DemoRun) -> None:
+        written.append(run.run_id)
         bar.update(1)
         bar.set_postfix_str(f"{run.run_id} ({run.format})", refresh=True)
         if bar.disable and not args.quiet:
-            print(f"rigtools: generate [{bar.n}/{n_runs}] {run.run_id}: {run.file.name}",
-                  file=sys.stderr)
+            print(f"rigtools: generate [{len(written)}/{n_runs}] {run.run_id}: "
+                  f"{run.file.name}", file=sys.stderr)
 
     with bar:
         demo = generate_demo_campaign(out / "campaign", seed=args.seed, size=args.size,

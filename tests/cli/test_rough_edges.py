@@ -198,3 +198,13 @@ def test_observe_summary_skips_rows_without_a_fitted_frequency():
     obs = Observations(to_frame(rows), (RunObservations("R1", "r1.mcap", rows, True),))
     line = next(ln for ln in format_summary(obs).splitlines() if ln.startswith("R1"))
     assert line.split()[4:6] == ["2843.5", "0.0300"]
+
+
+def test_demo_generation_counts_its_runs_in_the_log(tmp_path, capsys, monkeypatch):
+    """Without a terminal, one line per generated run, counted 1..n (the pipeline stubbed)."""
+    import rigtools.cli.demo as demo_cli
+
+    monkeypatch.setattr(demo_cli, "run_pipeline", lambda *a, **k: 0)
+    assert main(["demo", "-o", str(tmp_path / "d"), "--size", "ci", "--duration", "1.5"]) == 0
+    lines = [ln for ln in capsys.readouterr().err.splitlines() if "generate [" in ln]
+    assert [ln.split("[")[1].split("]")[0] for ln in lines] == [f"{i}/8" for i in range(1, 9)]
