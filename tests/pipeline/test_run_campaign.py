@@ -189,3 +189,25 @@ def test_process_pool_and_dask_give_the_serial_results(demo_source: Path,
                 assert a[f] == b[f], f"{name}: {f} differs from the serial run's"
     settings = pipeline_json(outs["dask"])["settings"]
     assert settings == {"jobs": 1, "dask": "local", "seed": None}
+
+
+def test_a_bug_while_reading_fails_the_run_without_caching_it(
+        demo_source: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A reader bug (not bad input) is a failed run, but the next run tries the file again."""
+    import rigtools.pipeline.run_tasks as run_tasks
+
+    camp = small_campaign(demo_source, tmp_path / "c", ("LS9-30C",), accel=("accel_x",))
+    out = tmp_path / "out"
+    real = run_tasks.read_run
+
+    def buggy(*args: Any, **kwargs: Any) -> Any:
+        raise TypeError("a bug in a reader")
+
+    monkeypatch.setattr(run_tasks, "read_run", buggy)
+    first = run_campaign(camp, out, stages=("ingest",), progress=False)
+    (run,) = first.runs
+    assert run.status == "failed" and "internal error TypeError" in (run.error or "")
+    assert not list((out / "ingest").glob("*.key"))
+    monkeypatch.setattr(run_tasks, "read_run", real)
+    again = run_campaign(camp, out, stages=("ingest",), progress=False)
+    assert again.runs[0].status == "ok" and again.stages["ingest"]["computed"] == 1
