@@ -2,7 +2,10 @@
 
 * :mod:`models.dynamics.sdof`: the non-dimensional equation, dead-zone backlash, and the
   FVMS / VVMS / LSTE models built from a :func:`~models.stiffness.mesh_cycle.mesh_cycle`;
-* :mod:`models.dynamics.integrate`: fixed-step RK4 (numba, and a plain-Python reference);
+* :mod:`models.dynamics.integrate`: a model's tables, periods and settling to a periodic
+  steady state from Python, with plain-Python and solve_ivp references;
+* :mod:`models.dynamics.sdof_kernels`: every compiled SDOF/ITMS kernel (RK4, settling and
+  period detection, sweeps) in one file, so numba's disk cache cannot go stale across files;
 * :mod:`models.dynamics.sweep`: up/down frequency sweeps with Arms, contact flags and period
   detection, and the hysteresis (jump) bands where the up and down branches differ;
 * :mod:`models.dynamics.itms`: the ITMS model (seed 003 Eq. 28), one dead-zone spring per tooth
@@ -37,7 +40,6 @@ from models.dynamics.dimensional import (
     to_dimensional,
 )
 from models.dynamics.integrate import (
-    MAX_PERIOD,
     POINCARE_POINTS,
     Settled,
     periods,
@@ -60,6 +62,7 @@ from models.dynamics.sdof import (
     printed_contact_force,
     sdof_from_mesh_cycle,
 )
+from models.dynamics.sdof_kernels import MAX_PERIOD
 from models.dynamics.sweep import (
     SweepResult,
     hysteresis_band,

@@ -5,12 +5,12 @@ ratios, backlash values or tip reliefs, each swept up and down. :func:`sweep_man
 all in one compiled call, one sweep per thread-chunk (``numba.prange`` over the sweeps; the
 points of a sweep stay sequential because each starts from the previous one's state). Each
 sweep is computed by the very kernel that :func:`models.dynamics.sweep.sweep` uses
-(:func:`~models.dynamics.integrate.sweep_kernel`), on the same tables, so its results are
+(:func:`~models.dynamics.sdof_kernels.sweep_kernel`), on the same tables, so its results are
 identical to the serial sweep's (tested bit for bit). Models with fewer tooth-pair columns than
 the widest are padded with inert columns (zero stiffness, infinite offsets), which changes no
 floating-point operation.
 
-The compiled kernel lives in :mod:`models.dynamics.integrate` next to the per-sweep kernel, so
+The compiled kernel lives in :mod:`models.dynamics.sdof_kernels` next to the per-sweep kernel, so
 numba's on-disk cache of both is invalidated together when that file changes. Threads: numba's
 default (the number of cores); set ``NUMBA_NUM_THREADS`` or call
 ``numba.set_num_threads`` to change it.
@@ -25,8 +25,9 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from models.dynamics.integrate import model_tables, sweep_many_kernel
+from models.dynamics.integrate import model_tables
 from models.dynamics.sdof import DynamicModel
+from models.dynamics.sdof_kernels import sweep_many_kernel
 from models.dynamics.sweep import SweepResult, empty_outputs, result_from_outputs
 
 __all__ = ["SweepJob", "sweep_many"]

@@ -3,7 +3,7 @@ r"""Frequency sweeps of the SDOF and ITMS models: steady state, Arms, contact lo
 Seed 003 Secs. 4-5. The sweep runs the frequencies in the given order (up or down) and
 **carries the state** from one frequency to the next, so a branch is followed until it
 disappears and the jumps and the hysteresis of the softening primary resonance appear. At
-each frequency (all in one compiled call, :func:`~models.dynamics.integrate.sweep_kernel`):
+each frequency (all in one compiled call, :func:`~models.dynamics.sdof_kernels.sweep_kernel`):
 
 1. transients are discarded by the convergence test of
    :func:`~models.dynamics.integrate.settle_periodic`: whole mesh periods until the Poincare
@@ -38,8 +38,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from models.dynamics.checks import check_settle_args
-from models.dynamics.integrate import POINCARE_POINTS, TableSet, model_tables, sweep_kernel
+from models.dynamics.integrate import POINCARE_POINTS, TableSet, model_tables
 from models.dynamics.sdof import DynamicModel
+from models.dynamics.sdof_kernels import sweep_kernel
 from models.errors import ModelError
 
 __all__ = [
@@ -77,7 +78,7 @@ class SweepResult:
     period : numpy.ndarray
         Response period in mesh periods, 1..8; 0 aperiodic (no repetition within ``tol`` at
         ``max_periods``); ``-n`` unresolved (repeats every ``n`` periods within ``tol``, but
-        the period could not be confirmed: see :mod:`models.dynamics.integrate`) (int).
+        the period could not be confirmed: see :mod:`models.dynamics.sdof_kernels`) (int).
     poincare : numpy.ndarray
         ``(n, POINCARE_POINTS, 2)`` last Poincare points ``(x, x')``, oldest first (units of
         ``L``); NaN where fewer periods were run.
@@ -144,7 +145,7 @@ def _check(tol: float, min_periods: int, max_periods: int, record_periods: int) 
 
 
 def empty_outputs(shape: tuple[int, ...]) -> dict[str, np.ndarray]:
-    """Output arrays of :func:`~models.dynamics.integrate.sweep_kernel` for ``shape`` points."""
+    """Output arrays of :func:`~models.dynamics.sdof_kernels.sweep_kernel` for ``shape`` points."""
     return dict(
         amps=np.zeros((*shape, 3)),
         mean=np.zeros(shape),

@@ -9,7 +9,8 @@ checks), :mod:`~rigtools.analysis.windows` (gap-aware segmenting),
 :mod:`~rigtools.analysis.spectral_window`,
 :mod:`~rigtools.analysis.welch`, :mod:`~rigtools.analysis.rms`,
 :mod:`~rigtools.analysis.spectrum_results`),
-:mod:`~rigtools.analysis.peaks` (peak detection and mesh-line classification),
+:mod:`~rigtools.analysis.peaks` (peak detection and classification; over
+:mod:`~rigtools.analysis.mesh_lines`, :mod:`~rigtools.analysis.peak_results`),
 :mod:`~rigtools.analysis.sdof_fit` (half-power damping and the single-DOF fit),
 :mod:`~rigtools.analysis.two_mode_fit` (two close modes in one peak, fitted jointly),
 :mod:`~rigtools.analysis.recording` (the :func:`analyse_recording` entry point),
@@ -21,6 +22,7 @@ speed steps; over :mod:`~rigtools.analysis.speed_types`, :mod:`~rigtools.analysi
 per step and along a run-up).
 """
 
+from rigtools.analysis.mesh_lines import LocationClass, classify_frequency
 from rigtools.analysis.orders import (
     RESAMPLER_PASSBAND,
     AngleSignal,
@@ -39,15 +41,11 @@ from rigtools.analysis.orders import (
     step_levels,
     step_levels_from_recording,
 )
+from rigtools.analysis.peak_results import ModalEstimate, Peak, PeakAnalysis
 from rigtools.analysis.peaks import (
     HalfPower,
-    LocationClass,
-    ModalEstimate,
-    Peak,
-    PeakAnalysis,
     SDOFFit,
     analyse_peaks,
-    classify_frequency,
     fit_sdof,
     half_power_damping,
     natural_frequencies,

@@ -14,10 +14,10 @@ For each peak of a Welch PSD (:class:`~rigtools.analysis.spectra.Spectrum`):
    the three bins around the maximum).
 3. **Location class**: a peak within tolerance of :math:`k f_\text{mesh}`,
    :math:`k f_\text{mesh} \pm j f_\text{shaft}` (:math:`1 \le k \le` ``max_mesh_order``,
-   default :data:`MAX_MESH_ORDER` = 5: the mesh harmonics a rig's spectrum shows as lines) or
-   :math:`k f_\text{shaft}` is a mesh harmonic, a mesh sideband or a shaft harmonic (in that
-   order of precedence). Mesh harmonics above ``max_mesh_order`` are not mesh lines: a peak
-   there is classified like any other.
+   default :data:`~rigtools.analysis.mesh_lines.MAX_MESH_ORDER` = 5: the mesh harmonics a rig's
+   spectrum shows as lines) or :math:`k f_\text{shaft}` is a mesh harmonic, a mesh sideband or
+   a shaft harmonic (in that order of precedence). Mesh harmonics above ``max_mesh_order`` are
+   not mesh lines: a peak there is classified like any other.
 4. **Damping**, two ways, each with a standard uncertainty:
 
    * half-power bandwidth, :math:`\zeta = (f_2 - f_1) / (2 f_\text{peak})` where the PSD has
@@ -39,8 +39,9 @@ For each peak of a Welch PSD (:class:`~rigtools.analysis.spectra.Spectrum`):
 
 5. **Kind**, from the peak's width against the window's main lobe:
 
-   * ``"structural"``: a *broad* peak, wherever it sits (:attr:`ModalEstimate.broad`): the fit
-     succeeded, its damping exceeds the resolution equivalent beyond doubt
+   * ``"structural"``: a *broad* peak, wherever it sits
+     (:attr:`~rigtools.analysis.peak_results.ModalEstimate.broad`): the fit succeeded, its
+     damping exceeds the resolution equivalent beyond doubt
      (:math:`\zeta - 2\sigma_\zeta > \zeta_\text{res} = B_\text{3dB} / (2 f)`, with
      :math:`B_\text{3dB}` the window's half-power bandwidth: a pure tone appears that wide),
      its half-power band :math:`2 \zeta f_n` spans at least ``MIN_RESOLVED_MAINLOBES`` = 2
@@ -69,8 +70,8 @@ For each peak of a Welch PSD (:class:`~rigtools.analysis.spectra.Spectrum`):
    three standard uncertainties, the joint model fitting, both modes' damping resolved
    beyond doubt, and broad where a mode sits at a mesh or shaft line) each mode becomes
    its own structural peak at its f_n, its fit flagged ``joint_fit`` (without ``misfit``) and
-   carrying the joint fit (:attr:`ModalEstimate.joint`); otherwise the single-DOF fit stands
-   with its flags.
+   carrying the joint fit (:attr:`~rigtools.analysis.peak_results.ModalEstimate.joint`);
+   otherwise the single-DOF fit stands with its flags.
 6. **A line on a mode**: every line is masked out of the fits of the modes beside it (its
    main lobe, further while the PSD falls), and the structural peaks are refitted so. A line
    that sits on a mode hides the mode's maximum, so both are reported: for each line the PSD
@@ -82,7 +83,7 @@ For each peak of a Welch PSD (:class:`~rigtools.analysis.spectra.Spectrum`):
    ``false_alarm`` quantile (Sidak-corrected for the bins across the mode's half-power band,
    among which its maximum falls) and by at least ``LINE_ON_MODE_MIN_DB`` is a line on a
    mode: both are reported, the mode by the masked fit. A line within a structural peak's
-   half-power band names it in :attr:`Peak.on_mode`.
+   half-power band names it in :attr:`~rigtools.analysis.peak_results.Peak.on_mode`.
 7. **The quota** ``max_peaks`` keeps the peaks wider than the main lobe first, then the lines,
    each by prominence: lines do not crowd out modes. Lines beyond the quota are not reported
    but are masked and searched for a mode they hide (6).
@@ -107,14 +108,31 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Collection, Sequence
-from dataclasses import dataclass, replace
-from typing import Any, Literal
+from dataclasses import replace
+from typing import Any
 
 import numpy as np
 from scipy import signal as sps
 from scipy.ndimage import median_filter
 from scipy.stats import chi2
 
+from rigtools.analysis.mesh_lines import (
+    MAX_MESH_ORDER,
+    LocationClass,
+    classify_frequency,
+    line_bins,
+    mask_main_lobe,
+    mask_standing_lines,
+)
+from rigtools.analysis.peak_results import (
+    FALSE_ALARM,
+    LINE_KINDS,
+    ModalEstimate,
+    Peak,
+    PeakAnalysis,
+    joint_mode_resolved,
+    peak_kind,
+)
 from rigtools.analysis.sdof_fit import (
     LINE_FIT_FACTOR,
     HalfPower,
@@ -135,25 +153,15 @@ from rigtools.analysis.signal_checks import (
     check_band,
     check_response,
 )
-from rigtools.analysis.spectra import log_chi2_stats
 from rigtools.analysis.spectrum_results import Spectrum
 from rigtools.analysis.two_mode_fit import TwoModeFit, fit_two_modes_in_band, joint_band
 from rigtools.errors import SignalError
 
 __all__ = [
-    "FALSE_ALARM",
-    "LINE_KINDS",
-    "LOW_DOF",
-    "MAX_MESH_ORDER",
     "HalfPower",
-    "LocationClass",
-    "ModalEstimate",
-    "Peak",
-    "PeakAnalysis",
     "SDOFFit",
     "TwoModeFit",
     "analyse_peaks",
-    "classify_frequency",
     "detection_threshold_db",
     "fit_sdof",
     "half_power_damping",
@@ -164,29 +172,6 @@ __all__ = [
 # once numba, which ships its types, is analysed in the same run)
 _LOG10_E = math.log10(math.e)
 
-PeakKind = Literal["structural", "mesh_harmonic", "mesh_sideband", "shaft_harmonic", "tonal",
-                   "unresolved"]
-#: Default false-alarm probability per spectrum of the detection threshold (a noise bin
-#: anywhere in the searched band exceeding it).
-FALSE_ALARM = 0.01
-#: A structural peak's fitted damping must exceed the resolution equivalent by this many of
-#: its standard uncertainties.
-ZETA_MARGIN_SIGMA = 2.0
-#: ... and its half-power band (2 zeta f_n) must span at least this many bins,
-MIN_RESOLVED_BINS = 4.0
-#: ... and this many of the window's whole main lobes (a line a little smeared, or a line with
-#: its sidebands, is about one main lobe wide).
-MIN_RESOLVED_MAINLOBES = 2.0
-#: Below this many equivalent degrees of freedom a modal estimate is flagged ``low_dof``.
-LOW_DOF = 35.0
-#: A mode's PSD maximum lies where its top stands within this many standard deviations of
-#: the log estimate of the top (:attr:`ModalEstimate.centre_tolerance_Hz`).
-CENTRE_SIGMA = 3.0
-#: Highest mesh harmonic order taken as a mesh line (the harmonics a rig's spectrum shows as
-#: lines); a peak at a higher harmonic is classified like any other peak.
-MAX_MESH_ORDER = 5
-#: Kinds of a peak no wider than the window's main lobe.
-LINE_KINDS = ("mesh_harmonic", "mesh_sideband", "shaft_harmonic", "tonal")
 #: Width (bins) of the moving average the PSD beside a line is followed on, uphill to a mode.
 SHOULDER_SMOOTHING_BINS = 7
 #: A line is told apart on a mode whose half-power band spans this many times the line's
@@ -197,356 +182,7 @@ LINE_ON_MODE_MIN_DB = 3.0
 #: Peaks within this many half-power bandwidths of a peak are fitted with it as two modes
 #: (module docstring, 5a).
 JOINT_REACH = 3.0
-#: A mesh or shaft line of any order is masked out of a joint fit where its bin stands above
-#: its surroundings by more than noise does with this probability (module docstring, 5a).
-LINE_STAND_OUT_FALSE_ALARM = 1e-3
 
-
-# --------------------------------------------------------------------------------------------
-# results
-
-
-@dataclass(frozen=True)
-class ModalEstimate:
-    r"""Natural frequency and damping of one PSD peak, two ways, with uncertainties.
-
-    Attributes
-    ----------
-    f_n_Hz, f_n_std_Hz : float
-        Natural frequency from the SDOF fit (Hz) and its standard uncertainty.
-    zeta, zeta_std : float
-        Damping ratio from the SDOF fit and its standard uncertainty.
-    zeta_half_power, zeta_half_power_std : float
-        Damping ratio by the half-power bandwidth and its standard uncertainty.
-    f_peak_Hz, f_peak_std_Hz : float
-        Interpolated peak frequency (Hz, Gaussian interpolation) and its standard uncertainty.
-    psd_peak_per_Hz : float
-        Interpolated PSD at the peak (unit^2/Hz).
-    zeta_resolution : float
-        :math:`B_\text{3dB}/(2 f_\text{peak})`: the damping a pure tone appears to have.
-    fit : SDOFFit
-    half_power : HalfPower
-    response : str
-        SDOF response fitted: ``"displacement"``, ``"velocity"`` or ``"acceleration"``.
-    dof : float
-        Equivalent degrees of freedom of the PSD (``low_dof`` below ``LOW_DOF``).
-    resolution_Hz : float
-        Bin spacing of the PSD (Hz).
-    mainlobe_half_width_Hz : float
-        Half-width of the window's main lobe (Hz; 2 bins for Hann): how wide a line is.
-    joint : TwoModeFit or None
-        For a mode fitted jointly with a close neighbour (``"joint_fit"`` in the fit's flags,
-        module docstring 5a): the joint fit, with the covariance of both modes' f_n and zeta;
-        ``f_peak_Hz`` is then the fitted f_n (the merged peak has one maximum for two modes)
-        and the half-power damping is not measured. Else None.
-    """
-
-    f_n_Hz: float
-    f_n_std_Hz: float
-    zeta: float
-    zeta_std: float
-    zeta_half_power: float
-    zeta_half_power_std: float
-    f_peak_Hz: float
-    f_peak_std_Hz: float
-    psd_peak_per_Hz: float
-    zeta_resolution: float
-    fit: SDOFFit
-    half_power: HalfPower
-    response: str = "displacement"
-
-    #: Equivalent degrees of freedom of the PSD the estimate comes from.
-    dof: float = float("nan")
-    #: Bin spacing of the PSD (Hz).
-    resolution_Hz: float = float("nan")
-    #: Half-width of the window's main lobe (Hz).
-    mainlobe_half_width_Hz: float = float("nan")
-    #: The joint fit this mode comes from, if any.
-    joint: TwoModeFit | None = None
-
-    @property
-    def broad(self) -> bool:
-        r"""A mode's peak: wider than a line beyond doubt, and centred where the peak is.
-
-        All of:
-
-        * the fit succeeded and its damping exceeds the resolution equivalent (the half-power
-          width of the window's main lobe) beyond doubt,
-          :math:`\zeta - 2\sigma_\zeta > \zeta_\text{res}` (``ZETA_MARGIN_SIGMA``);
-        * the half-power band :math:`2\zeta f_n` spans at least ``MIN_RESOLVED_MAINLOBES``
-          whole main lobes (:math:`2 \times` ``mainlobe_half_width_Hz`` each; 8 bins for
-          Hann) and ``MIN_RESOLVED_BINS`` bins: a peak hardly wider than a line may be a line
-          a little smeared by the speed, or a line with its sidebands;
-        * the peak lies where a mode's noisy maximum can, near :math:`f_n`
-          (:attr:`centre_tolerance_Hz`: within half to one half-power half-width, by the
-          scatter of the estimate): a line on the skirt of a mode, or a horn of a line swept
-          by a varying speed, is not the mode its fit describes.
-
-        A noise spike fitted with a damping just above the resolution limit is not broad. A
-        line *on* a mode's maximum is told apart by :func:`analyse_peaks` (module docstring,
-        6).
-        """
-        f = self.fit
-        z, sz = self.zeta, self.zeta_std
-        if not (f.success and not f.at_lower_bound and np.isfinite(z) and np.isfinite(sz)):
-            return False
-        if not (z - ZETA_MARGIN_SIGMA * sz > self.zeta_resolution
-                and self.resolved_bins >= MIN_RESOLVED_BINS):
-            return False
-        if np.isfinite(self.mainlobe_half_width_Hz) and not (
-                z * self.f_n_Hz >= MIN_RESOLVED_MAINLOBES * self.mainlobe_half_width_Hz):
-            return False
-        return bool(abs(self.f_peak_Hz - self.f_n_Hz) <= self.centre_tolerance_Hz)
-
-    @property
-    def centre_tolerance_Hz(self) -> float:  # noqa: N802 (unit in the name)
-        r"""How far from :math:`f_n` the maximum of a mode's PSD may lie (Hz).
-
-        The maximum of a noisy flat top falls anywhere the top stands within
-        ``CENTRE_SIGMA`` standard deviations of the log estimate,
-        :math:`s = \sqrt{\psi'(\nu/2)}`, of its top: :math:`|f - f_n| \le x\,\zeta f_n`,
-        :math:`1/(1 + x^2) = e^{-3s}`, x kept within 0.5 to 1 half-power half-widths; plus
-        two standard uncertainties of the interpolated maximum.
-        """
-        if not (np.isfinite(self.zeta) and np.isfinite(self.dof)):
-            return float("nan")
-        s = float(np.sqrt(log_chi2_stats(max(self.dof, 1.0))[1]))
-        x = float(np.clip(np.sqrt(np.expm1(CENTRE_SIGMA * s)), 0.5, 1.0))
-        return x * self.zeta * self.f_n_Hz + 2 * max(self.f_peak_std_Hz, 0.0)
-
-    @property
-    def narrow(self) -> bool:
-        r"""No wider than a line: the peak's width is the window's main lobe.
-
-        The half-power damping measured on the PSD is at most ``LINE_FIT_FACTOR`` times the
-        resolution equivalent :math:`\zeta_\text{res}`, or the fitted damping is at its lower
-        bound or at most :math:`\zeta_\text{res}`. Never together with :attr:`broad`.
-        """
-        if self.broad:
-            return False
-        zhp, z = self.zeta_half_power, self.fit.zeta
-        if np.isfinite(zhp) and zhp <= LINE_FIT_FACTOR * self.zeta_resolution:
-            return True
-        return bool(np.isfinite(z) and (self.fit.at_lower_bound or z <= self.zeta_resolution))
-
-    @property
-    def resolved_bins(self) -> float:
-        r"""Bins across the fitted half-power band, :math:`2\zeta f_n / \Delta f`."""
-        if not (np.isfinite(self.zeta) and self.resolution_Hz > 0):
-            return 0.0
-        return float(2 * self.zeta * self.f_n_Hz / self.resolution_Hz)
-
-    @property
-    def low_dof(self) -> bool:
-        """The PSD has few averages (dof < ``LOW_DOF``): damping less reliable."""
-        return bool(self.dof < LOW_DOF)
-
-
-@dataclass(frozen=True)
-class LocationClass:
-    """Where a frequency sits relative to the mesh and shaft frequencies.
-
-    Attributes
-    ----------
-    kind : str or None
-        ``"mesh_harmonic"``, ``"mesh_sideband"``, ``"shaft_harmonic"``, or None.
-    harmonic : int or None
-        k, the mesh (or shaft) harmonic order.
-    sideband : int or None
-        j, signed sideband order (``-1`` is the lower first sideband).
-    shaft_Hz : float or None
-        The shaft frequency of the sideband or shaft harmonic (Hz).
-    expected_Hz : float or None
-        The frequency matched (Hz).
-    """
-
-    kind: str | None = None
-    harmonic: int | None = None
-    sideband: int | None = None
-    shaft_Hz: float | None = None
-    expected_Hz: float | None = None
-
-
-@dataclass(frozen=True)
-class Peak:
-    r"""One PSD peak, its location class and (unless it is a mesh or shaft line) its mode.
-
-    Attributes
-    ----------
-    index : int
-        Bin of the maximum.
-    f_Hz, f_std_Hz : float
-        Interpolated frequency (Hz) and standard uncertainty.
-    psd_per_Hz : float
-        Interpolated PSD at the peak (unit^2/Hz).
-    prominence_dB : float
-        Prominence on the log PSD (dB); of a structural peak, the larger of that and its
-        prominence on the PSD smoothed with the lines masked (a line taller than the mode's
-        top on its skirt cuts the raw prominence).
-    kind : str
-        ``"structural"``, ``"mesh_harmonic"``, ``"mesh_sideband"``, ``"shaft_harmonic"``,
-        ``"tonal"`` or ``"unresolved"``.
-    location : LocationClass
-        Where the peak sits relative to the mesh and shaft lines (for a structural peak, the
-        line its frequency falls within tolerance of, if any: that alone says nothing).
-    mode : ModalEstimate or None
-        Damping estimates of the peak as measured (for a line, those of the line; None for a
-        line on a mode, whose mode is its own structural peak). A structural peak found beside
-        a line (its maximum hidden by the line) has ``f_Hz = f_n``, ``index`` the bin nearest
-        it, and the prominence of its maximum on the PSD smoothed with the line masked.
-    on_mode : int or None
-        For a line (or an unresolved peak): the index, in :attr:`PeakAnalysis.structural`, of
-        the structural peak whose half-power band :math:`f_n \pm \zeta f_n` holds it (masked
-        out of that peak's fit); else None.
-    """
-
-    index: int
-    f_Hz: float
-    f_std_Hz: float
-    psd_per_Hz: float
-    prominence_dB: float
-    kind: str
-    location: LocationClass
-    mode: ModalEstimate | None
-    on_mode: int | None = None
-
-    @property
-    def possible_resonance(self) -> bool:
-        """A line that sits on a structural mode (reported as its own structural peak)."""
-        return bool(self.kind != "structural" and self.on_mode is not None)
-
-
-@dataclass(frozen=True)
-class PeakAnalysis:
-    """The peaks of one PSD.
-
-    Attributes
-    ----------
-    peaks : tuple of Peak
-        In order of frequency.
-    mesh_frequency_Hz : float or None
-    shaft_frequencies_Hz : tuple of float
-    tolerance_Hz : float
-        Absolute part of the matching tolerance (Hz); the tolerance at f is
-        ``tolerance_Hz + rtol * f``.
-    rtol : float
-    threshold_dB : float
-        Prominence threshold used (dB).
-    detection_threshold_dB : float
-        Least height of a peak above the local background (running median, dB): the
-        chi-square quantile of the Welch estimate with the equivalent dof, Sidak-corrected
-        for the bins searched so that pure noise gives a peak with probability
-        ``false_alarm`` per spectrum. A peak below it is still kept when its prominence
-        exceeds the spread between the upper and lower such quantiles (a broad feature that
-        lifts the running median).
-    false_alarm : float
-    max_mesh_order : int
-        Highest mesh harmonic taken as a mesh line (:data:`MAX_MESH_ORDER` by default).
-    """
-
-    peaks: tuple[Peak, ...]
-    mesh_frequency_Hz: float | None
-    shaft_frequencies_Hz: tuple[float, ...]
-    tolerance_Hz: float
-    rtol: float
-    threshold_dB: float
-    detection_threshold_dB: float = 0.0
-    false_alarm: float = FALSE_ALARM
-    max_mesh_order: int = MAX_MESH_ORDER
-
-    @property
-    def structural(self) -> tuple[Peak, ...]:
-        """Peaks classified as structural resonances."""
-        return tuple(p for p in self.peaks if p.kind == "structural")
-
-    @property
-    def modes(self) -> tuple[ModalEstimate, ...]:
-        """Modal estimates of the structural peaks."""
-        return tuple(p.mode for p in self.structural if p.mode is not None)
-
-    def of_kind(self, kind: str) -> tuple[Peak, ...]:
-        """Peaks of one kind."""
-        return tuple(p for p in self.peaks if p.kind == kind)
-
-    def lines_on(self, index: int) -> tuple[Peak, ...]:
-        """Lines within the half-power band of structural peak ``index``, masked out of its fit.
-
-        ``index`` is the peak's place in :attr:`structural`.
-        """
-        return tuple(p for p in self.peaks if p.on_mode == index)
-
-
-# --------------------------------------------------------------------------------------------
-# location classes
-
-
-def classify_frequency(f_Hz: float, *, mesh_frequency_Hz: float | None,
-                       shaft_frequencies_Hz: Sequence[float] = (), tolerance_Hz: float = 0.0,
-                       rtol: float = 0.002, max_sideband: int = 3,
-                       max_shaft_harmonic: int = 10,
-                       max_harmonic: int = MAX_MESH_ORDER) -> LocationClass:
-    r"""Match a frequency to mesh harmonics, their sidebands and shaft harmonics.
-
-    Parameters
-    ----------
-    f_Hz : float
-        Frequency (Hz).
-    mesh_frequency_Hz : float or None
-        Mesh frequency :math:`f_m = z_1 n_1 / 60` (Hz).
-    shaft_frequencies_Hz : sequence of float
-        Shaft rotation frequencies (Hz), e.g. pinion and wheel.
-    tolerance_Hz, rtol : float
-        Matching tolerance at f: ``tolerance_Hz + rtol * f`` (Hz).
-    max_sideband : int
-        Largest sideband order j.
-    max_shaft_harmonic : int
-        Largest shaft harmonic order.
-    max_harmonic : int
-        Largest mesh harmonic order k taken as a mesh line (and whose sidebands are);
-        default :data:`MAX_MESH_ORDER`.
-
-    Returns
-    -------
-    LocationClass
-        The first match in the order mesh harmonic (1 <= k <= max_harmonic), mesh sideband
-        (:math:`k f_m \pm j f_s`, 1 <= k <= max_harmonic, 1 <= j <= max_sideband), shaft
-        harmonic (:math:`k f_s`, 1 <= k <= max_shaft_harmonic); the nearest within a class.
-
-    Examples
-    --------
-    >>> classify_frequency(1225.0, mesh_frequency_Hz=400.0, shaft_frequencies_Hz=[25.0],
-    ...                    tolerance_Hz=2.0).sideband
-    1
-    """
-    f = float(f_Hz)
-    tol = float(tolerance_Hz) + float(rtol) * abs(f)
-    shafts = [float(s) for s in shaft_frequencies_Hz if s is not None and s > 0]
-    if mesh_frequency_Hz is not None and mesh_frequency_Hz > 0:
-        fm = float(mesh_frequency_Hz)
-        k = round(f / fm)
-        if 1 <= k <= max_harmonic and abs(f - k * fm) <= tol:
-            return LocationClass("mesh_harmonic", k, None, None, k * fm)
-        best: tuple[float, LocationClass] | None = None
-        for fs_ in shafts:
-            for j in range(1, max_sideband + 1):
-                for sign in (-1, 1):
-                    kk = round((f - sign * j * fs_) / fm)
-                    if not 1 <= kk <= max_harmonic:
-                        continue
-                    expected = kk * fm + sign * j * fs_
-                    d = abs(f - expected)
-                    if d <= tol and (best is None or d < best[0]):
-                        best = (d, LocationClass("mesh_sideband", kk, sign * j, fs_, expected))
-        if best is not None:
-            return best[1]
-    best = None
-    for fs_ in shafts:
-        k = round(f / fs_)
-        if 1 <= k <= max_shaft_harmonic:
-            d = abs(f - k * fs_)
-            if d <= tol and (best is None or d < best[0]):
-                best = (d, LocationClass("shaft_harmonic", k, None, fs_, k * fs_))
-    return best[1] if best is not None else LocationClass()
 
 
 def _estimate(ctx: PSDContext, k0: int, lo: int, hi: int, mask: np.ndarray, p: int,
@@ -567,12 +203,6 @@ def _estimate(ctx: PSDContext, k0: int, lo: int, hi: int, mask: np.ndarray, p: i
         mainlobe_half_width_Hz=ctx.props.mainlobe_half_width_bins * ctx.df)
 
 
-def _main_lobe(ctx: PSDContext, k: int, mask: np.ndarray) -> None:
-    """Mask the main lobe of a line at bin k and one bin more each side (not further)."""
-    base = int(np.ceil(ctx.props.mainlobe_half_width_bins)) + 1
-    mask[max(k - base, 0): min(k + base, mask.size - 1) + 1] = True
-
-
 def _band(ctx: PSDContext, k: int, others: Sequence[int], mask: np.ndarray
           ) -> tuple[int, int]:
     """Bins ``[lo, hi]`` a peak at k is fitted in: up to the PSD minimum before the next peak."""
@@ -587,15 +217,6 @@ def _band(ctx: PSDContext, k: int, others: Sequence[int], mask: np.ndarray
         j = min(right)
         hi = k + int(np.argmin(np.where(mask[k: j + 1], np.inf, lnP[k: j + 1])))
     return lo, hi
-
-
-def _kind(mode: ModalEstimate, loc: LocationClass) -> str:
-    """Kind of a peak from its width (:attr:`ModalEstimate.broad`, ``.narrow``) and location."""
-    if mode.broad:
-        return "structural"
-    if loc.kind is not None:
-        return loc.kind
-    return "tonal" if mode.narrow else "unresolved"
 
 
 def _smoothed_log(psd: np.ndarray, mask: np.ndarray, m: int) -> np.ndarray:
@@ -668,7 +289,7 @@ class _Peaks:
         is not fitted again.
         """
         own = mask.copy()
-        _main_lobe(self.ctx, k, own)
+        mask_main_lobe(self.ctx, k, own)
         L = _smoothed_log(self.ctx.psd, own, SHOULDER_SMOOTHING_BINS)
         tops = [t for t in (_uphill(L, k, -1, lo), _uphill(L, k, 1, hi)) if t is not None]
         if not tops:
@@ -699,8 +320,9 @@ class _Peaks:
         partner (unless in ``joined``, reported by a joint fit already): the band reaches past
         the partner peaks
         (:func:`~rigtools.analysis.two_mode_fit.joint_band`) up to the dip before the next
-        peak. Returns the accepted joint fit (both modes resolved, :func:`_joint_mode_resolved`)
-        and the partner peaks it covers, or None: the single-DOF fit stands, with its flags.
+        peak. Returns the accepted joint fit (both modes resolved,
+        :func:`~rigtools.analysis.peak_results.joint_mode_resolved`) and the partner peaks it
+        covers, or None: the single-DOF fit stands, with its flags.
         """
         ctx, fit = self.ctx, mode.fit
         if not (fit.success and np.isfinite(fit.zeta)):
@@ -711,12 +333,12 @@ class _Peaks:
         group = (k, *partners)
         lo, hi = _band(ctx, k, [j for j in limits if j not in group], mask)
         a, b = joint_band(ctx, fit, min(group), max(group), lo, hi, self.fit_span)
-        mask = _mask_standing_lines(ctx, self.line_bins, a, b, mask)
+        mask = mask_standing_lines(ctx, self.line_bins, a, b, mask)
         tm = fit_two_modes_in_band(ctx, a, b, mask, fit, mode.zeta_resolution, self.p,
                                    hints_Hz=[float(ctx.f[j]) for j in partners])
         if tm is None or not tm.accepted:
             return None
-        if not all(_joint_mode_resolved(e, locate(e.f_n_Hz))
+        if not all(joint_mode_resolved(e, locate(e.f_n_Hz))
                    for e in _joint_estimates(ctx, tm, self.response)):
             return None
         covered = tuple(j for j in limits if j != k and j not in joined and any(
@@ -823,10 +445,11 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
     rtol : float
         Relative matching tolerance (speed variation during the record).
     max_sideband, max_shaft_harmonic : int
-        See :func:`classify_frequency`.
+        See :func:`~rigtools.analysis.mesh_lines.classify_frequency`.
     max_mesh_order : int
         Highest mesh harmonic taken as a mesh line (with its sidebands), default
-        :data:`MAX_MESH_ORDER` = 5: the harmonics a rig's spectrum shows as lines. A peak at
+        :data:`~rigtools.analysis.mesh_lines.MAX_MESH_ORDER` = 5: the harmonics a rig's spectrum
+        shows as lines. A peak at
         a higher harmonic is classified like any other (a narrow one ``"tonal"``, a broad
         one ``"structural"``). 0: no mesh lines.
     response : {'displacement', 'velocity', 'acceleration'}
@@ -913,9 +536,9 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
         for fk in np.arange(1, top + 1) * mesh_frequency_Hz:
             k = round(fk / df)
             if 0 < k < n - 1 and not line_mask[k]:
-                _main_lobe(ctx, k + int(np.argmax(lnP[k - 1: k + 2])) - 1, line_mask)
+                mask_main_lobe(ctx, k + int(np.argmax(lnP[k - 1: k + 2])) - 1, line_mask)
     work = _Peaks(ctx, p, fit_span, response, threshold, false_alarm)
-    work.line_bins = _line_bins(ctx, mesh_frequency_Hz, shafts, max_sideband,
+    work.line_bins = line_bins(ctx, mesh_frequency_Hz, shafts, max_sideband,
                                 max_shaft_harmonic)
     prominence = {int(k): float(v) for k, v in zip(idx, prom, strict=True)}
 
@@ -931,7 +554,7 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
             j for j, *_ in located if j != k]
         lo, hi = _band(ctx, k, others, mask)
         mode = work.estimate(k, lo, hi, mask, line=loc.kind is not None)
-        first_pass.append((k, fk, fstd, lnk, loc, mode, _kind(mode, loc)))
+        first_pass.append((k, fk, fstd, lnk, loc, mode, peak_kind(mode, loc)))
         fitted[k] = (lo, hi, mask)
 
     # pass 2: every line masked out of the modes beside it
@@ -954,7 +577,7 @@ def analyse_peaks(spectrum: Spectrum, *, mesh_frequency_Hz: float | None = None,
 
     def line_mask_of(k: int, mask: np.ndarray) -> np.ndarray:
         out = mask.copy()
-        _main_lobe(ctx, k, out)
+        mask_main_lobe(ctx, k, out)
         return out
 
     joined: set[int] = set()  # peaks reported by a joint fit of two modes
@@ -1064,73 +687,6 @@ def _joint_estimates(ctx: PSDContext, tm: TwoModeFit, response: str
             response=response, dof=ctx.dof, resolution_Hz=ctx.df,
             mainlobe_half_width_Hz=ctx.props.mainlobe_half_width_bins * ctx.df, joint=tm))
     return out[0], out[1]
-
-
-def _line_bins(ctx: PSDContext, mesh_frequency_Hz: float | None, shafts: Sequence[float],
-               max_sideband: int, max_shaft_harmonic: int) -> np.ndarray:
-    """Bins of every mesh harmonic below Nyquist with its sidebands, and the shaft harmonics."""
-    f_top = float(ctx.f[-1])
-    out: list[float] = []
-    if mesh_frequency_Hz is not None and mesh_frequency_Hz > 0:
-        h = np.arange(1, int(f_top // mesh_frequency_Hz) + 1) * float(mesh_frequency_Hz)
-        out += list(h)
-        for fs_ in shafts:
-            for j in range(1, max_sideband + 1):
-                out += list(h - j * fs_) + list(h + j * fs_)
-    for fs_ in shafts:
-        out += [k * fs_ for k in range(1, max_shaft_harmonic + 1)]
-    k = np.round(np.asarray(out, np.float64) / ctx.df).astype(np.int64)
-    return np.unique(k[(k > 0) & (k < ctx.f.size - 1)])
-
-
-def _mask_standing_lines(ctx: PSDContext, line_bins: np.ndarray, a: int, b: int,
-                         mask: np.ndarray) -> np.ndarray:
-    r"""``mask`` with the main lobes of the mesh and shaft lines that stand out in ``[a, b]``.
-
-    A line of any order stands out when the PSD at its bin (or a neighbour) exceeds the median
-    of the bins 3 to 16 away (other lines' bins left out) by the one-sided
-    ``LINE_STAND_OUT_FALSE_ALARM`` quantile of the Welch estimate (:math:`\chi^2_\nu/\nu`):
-    the joint fit of two modes would otherwise take a cluster of weak lines with their
-    sidebands for a second mode. A mode's smooth top does not stand out so; the lines are
-    masked only there, for the joint fit.
-    """
-    out = mask.copy()
-    nu = max(ctx.dof, 1.0)
-    lim = float(np.log(chi2.isf(LINE_STAND_OUT_FALSE_ALARM, nu) / nu)
-                - np.log(chi2.median(nu) / nu))
-    near_line = np.zeros(ctx.f.size, bool)  # the ring about a line leaves the other lines out
-    for k in line_bins:
-        near_line[max(int(k) - 2, 0): int(k) + 3] = True
-    for k in line_bins[(line_bins >= a) & (line_bins <= b)]:
-        k = int(k)
-        ring = np.r_[np.arange(k - 16, k - 2), np.arange(k + 3, k + 17)]
-        ring = ring[(ring > 0) & (ring < ctx.f.size)]
-        ring = ring[~near_line[ring]]
-        if ring.size < 4:
-            continue
-        top = k - 1 + int(np.argmax(ctx.lnP[k - 1: k + 2]))
-        if ctx.lnP[top] - float(np.median(ctx.lnP[ring])) > lim:
-            _main_lobe(ctx, top, out)
-    return out
-
-
-def _joint_mode_resolved(mode: ModalEstimate, loc: LocationClass) -> bool:
-    r"""A mode of a joint fit is a mode: its damping beyond the resolution limit.
-
-    The fit succeeded, :math:`\zeta - 2\sigma_\zeta > \zeta_\text{res}`
-    (``ZETA_MARGIN_SIGMA``) and the half-power band spans ``MIN_RESOLVED_BINS`` bins; at a
-    mesh or shaft line (``loc``), also :attr:`ModalEstimate.broad` (a line smeared by the
-    speed beside a mode would otherwise pass for a narrow second mode). Away from the lines
-    the width of two main lobes is not asked: the test of the joint fit already says the
-    second mode is there.
-    """
-    if loc.kind is not None:
-        return mode.broad
-    f, z, sz = mode.fit, mode.zeta, mode.zeta_std
-    if not (f.success and not f.at_lower_bound and np.isfinite(z) and np.isfinite(sz)):
-        return False
-    return bool(z - ZETA_MARGIN_SIGMA * sz > mode.zeta_resolution
-                and mode.resolved_bins >= MIN_RESOLVED_BINS)
 
 
 def _known(mode: ModalEstimate, modes: Sequence[Peak]) -> bool:

@@ -24,13 +24,9 @@ from typing import Any, Final, Literal
 
 import numpy as np
 
-from rigtools.analysis.peaks import (
-    LOW_DOF,
-    MAX_MESH_ORDER,
-    ModalEstimate,
-    PeakAnalysis,
-    analyse_peaks,
-)
+from rigtools.analysis.mesh_lines import MAX_MESH_ORDER
+from rigtools.analysis.peak_results import LOW_DOF, ModalEstimate, PeakAnalysis
+from rigtools.analysis.peaks import analyse_peaks
 from rigtools.analysis.rms import mean_square_time, rms_from_psd
 from rigtools.analysis.sdof_fit import fit_sdof
 from rigtools.analysis.signal_checks import (
@@ -170,7 +166,7 @@ class QualityFlags:
     def low_dof(self) -> bool:
         """Few Welch averages (``0 < dof < LOW_DOF``): damping less reliable.
 
-        The same threshold as :attr:`~rigtools.analysis.peaks.ModalEstimate.low_dof`.
+        The same threshold as :attr:`~rigtools.analysis.peak_results.ModalEstimate.low_dof`.
         """
         return bool(0 < self.dof < LOW_DOF)
 

@@ -7,13 +7,15 @@ package reads it and turns it into the one tidy table the later stages read:
 - :mod:`~rigtools.campaign.manifest`: :func:`load_campaign` validates the file once, at the
   boundary, into a :class:`Campaign` (contract: ``data_schemas/campaign.schema.json``), with
   :mod:`~rigtools.campaign.run_files` (run files by glob) and
-  :mod:`~rigtools.campaign.conditions_sheet` (conditions from a CSV sheet);
+  :mod:`~rigtools.campaign.conditions_sheet` (conditions from a CSV sheet) and
+  :mod:`~rigtools.campaign.key_lines` (errors that name a key and its line);
 - :mod:`~rigtools.campaign.thermal_state`: :func:`thermal_reference`, the ``[thermal]``
   block as :mod:`models.thermal`'s reference state;
 - :mod:`~rigtools.campaign.observe`: :func:`observe_campaign` reads and analyses every run
   (:mod:`rigtools.ingest`, :mod:`rigtools.analysis`) into :class:`Observations`; per run,
   :func:`read_run` reads the recording with the run's sensors and :func:`observe_recording`
-  analyses it (:func:`observe_run` does both);
+  analyses it (:func:`observe_run` does both); the Arms rows in
+  :mod:`~rigtools.campaign.observe_orders`;
 - :mod:`~rigtools.campaign.observation_table`: the table's columns, flags and result classes;
 - :mod:`~rigtools.campaign.observation_files`: the table as Parquet (write, read, validate).
 

@@ -58,9 +58,10 @@ The contract is ``data_schemas/campaign.schema.json``. :func:`load_campaign` val
 file once, at the boundary: a key or value the schema does not allow, a duplicate run id, a
 gear set, DBC, mapping or conditions sheet that cannot be found, an unknown reader name, a
 glob matching no file, or a non-finite number raises :class:`CampaignError` naming the file,
-the key and its line (for the sheet: the CSV file, its row and column). Run files are *not*
-required to exist at load time: a missing recording is a failed run of the campaign (the
-observations stage records it and goes on with the others), not a broken manifest.
+the key and its line (found by :mod:`rigtools.campaign.key_lines`; for the sheet: the CSV
+file, its row and column). Run files are *not* required to exist at load time: a missing
+recording is a failed run of the campaign (the observations stage records it and goes on
+with the others), not a broken manifest.
 
 Errors::
 
@@ -83,10 +84,11 @@ from typing import Any, Literal
 from models.errors import ModelError
 from models.geometry.gear_sets import GearSet, gear_set_path, load_gear_set, shipped_gear_sets
 from rigtools.campaign.conditions_sheet import ConditionsSheet, read_conditions_sheet
+from rigtools.campaign.key_lines import KeyLines, dotted, schema_error
 from rigtools.campaign.run_files import expand_run_files, is_glob, run_id_for
 from rigtools.errors import CampaignError
 from rigtools.ingest.registry import READERS
-from rigtools.schemas import iter_errors, load_schema
+from rigtools.schemas import iter_errors
 
 __all__ = [
     "CONDITION_KEYS",
@@ -409,88 +411,6 @@ class Campaign:
 
 
 # --------------------------------------------------------------------------------------------
-# where keys are in the TOML text
-
-_HEADER = re.compile(r"""^\s*(\[\[?)\s*([A-Za-z0-9_\-."' ]+?)\s*\]\]?\s*(#.*)?$""")
-_KEY = re.compile(r"""^\s*("[^"]*"|'[^']*'|[A-Za-z0-9_\-]+(?:\s*\.\s*[A-Za-z0-9_\-]+)*)\s*=""")
-
-
-def _unquote(part: str) -> str:
-    part = part.strip()
-    return part[1:-1] if len(part) >= 2 and part[0] == part[-1] and part[0] in "\"'" else part
-
-
-class _Lines:
-    """Line numbers of the tables, array-of-tables entries and keys of a TOML text.
-
-    Paths are tuples as jsonschema reports them: ``("run", 2, "file")`` is the key ``file`` of
-    the third ``[[run]]``. Good for the flat manifests rigtools reads (no multi-line strings
-    holding ``key = value`` lines).
-    """
-
-    def __init__(self, text: str) -> None:
-        self.lines: dict[tuple[Any, ...], int] = {}
-        counts: dict[tuple[str, ...], int] = {}
-        current: tuple[Any, ...] = ()
-        for i, line in enumerate(text.splitlines(), 1):
-            h = _HEADER.match(line)
-            if h and not _KEY.match(line):
-                names = tuple(_unquote(p) for p in h.group(2).split("."))
-                if h.group(1) == "[[":
-                    n = counts.get(names, 0)
-                    counts[names] = n + 1
-                    current = (*names, n)
-                else:
-                    current = names
-                self.lines.setdefault(current, i)
-                continue
-            k = _KEY.match(line)
-            if k:
-                key = tuple(_unquote(p) for p in k.group(1).split("."))
-                self.lines.setdefault((*current, *key), i)
-
-    def line(self, path: tuple[Any, ...]) -> int | None:
-        """Line of ``path``, or of its nearest enclosing table that is in the text."""
-        p = tuple(path)
-        while p:
-            if p in self.lines:
-                return self.lines[p]
-            p = p[:-1]
-        return None
-
-
-_PATH_TOKEN = re.compile(r"\.([A-Za-z_][A-Za-z0-9_]*)|\[(\d+)\]|\['((?:[^'\\]|\\.)*)'\]")
-
-
-def _parse_json_path(json_path: str) -> tuple[Any, ...]:
-    """``$.run[1].file`` -> ``("run", 1, "file")``."""
-    out: list[Any] = []
-    for m in _PATH_TOKEN.finditer(json_path.removeprefix("$")):
-        if m.group(1) is not None:
-            out.append(m.group(1))
-        elif m.group(2) is not None:
-            out.append(int(m.group(2)))
-        else:
-            out.append(m.group(3))
-    return tuple(out)
-
-
-def _dotted(path: tuple[Any, ...]) -> str:
-    s = ""
-    for p in path:
-        s += f"[{p}]" if isinstance(p, int) else (f".{p}" if s else str(p))
-    return s or "the top level"
-
-
-def _table_name(path: tuple[Any, ...]) -> str:
-    names = [p for p in path if not isinstance(p, int)]
-    if not names:
-        return "the top level"
-    return f"[[{'.'.join(names)}]]" if path and isinstance(path[-1], int) else \
-        f"[{'.'.join(names)}]"
-
-
-# --------------------------------------------------------------------------------------------
 # loading
 
 
@@ -505,42 +425,6 @@ def _walk_floats(obj: Any, path: tuple[Any, ...] = ()) -> Iterator[tuple[tuple[A
             yield from _walk_floats(v, (*path, i))
 
 
-def _schema_error(p: Path, lines: _Lines, json_path: str, message: str) -> CampaignError:
-    path = _parse_json_path(json_path)
-    unexpected = re.findall(r"'([^']+)'", message.split("(", 1)[1]) if (
-        "were unexpected" in message or "was unexpected" in message) else []
-    if unexpected:
-        # name the first unknown key in file order, with its line
-        keyed = sorted((lines.line((*path, k)) or 0, k) for k in unexpected)
-        first_line, key = keyed[0]
-        allowed = _allowed_keys(path)
-        close = difflib.get_close_matches(key, allowed, n=1, cutoff=0.6) or [
-            a for a in allowed if a.lower() == key.lower()]
-        hint = f" (did you mean {close[0]!r}?)" if close else ""
-        more = f"; also unknown: {', '.join(k for _, k in keyed[1:])}" if len(keyed) > 1 else ""
-        return CampaignError(
-            p, f"line {first_line}" if first_line else None,
-            f"one of the keys {', '.join(allowed)} in {_table_name(path)}"
-            if allowed else "no such key",
-            f"unknown key {key!r}{hint}{more}")
-    line = lines.line(path)
-    at = f"line {line}" if line else None
-    m = re.match(r"'([^']+)' is a required property", message)
-    if m:
-        return CampaignError(p, at, f"key {m.group(1)!r} in {_table_name(path)}", "none")
-    return CampaignError(p, at,
-                         f"a value allowed by data_schemas/{SCHEMA} for {_dotted(path)}",
-                         message)
-
-
-def _allowed_keys(path: tuple[Any, ...]) -> list[str]:
-    node: Any = load_schema(SCHEMA)
-    for part in path:
-        if isinstance(part, int):
-            node = node.get("items", {})
-        else:
-            node = node.get("properties", {}).get(part, {})
-    return list(node.get("properties", {}))
 
 
 def _resolve(base: Path, value: str) -> Path:
@@ -583,15 +467,15 @@ def load_campaign(path: str | Path) -> Campaign:
         where = f"line {m.group(1)}, column {m.group(2)}" if m else None
         raise CampaignError(p, where, "a TOML file", None,
                             re.sub(r"\s*\(at line .*\)$", "", str(exc))) from exc
-    lines = _Lines(text)
+    lines = KeyLines(text)
     errors = iter_errors(doc, SCHEMA)
     if errors:
-        raise _schema_error(p, lines, *errors[0])
+        raise schema_error(p, lines, *errors[0], SCHEMA)
     for key_path, v in _walk_floats(doc):
         if not math.isfinite(v):
             line = lines.line(key_path)
             raise CampaignError(p, f"line {line}" if line else None,
-                                f"a finite number for {_dotted(key_path)}", repr(v))
+                                f"a finite number for {dotted(key_path)}", repr(v))
 
     def at(*where: Any) -> str | None:
         line = lines.line(tuple(where))

@@ -72,7 +72,9 @@ silently.
 
 Files
 -----
-The table's columns, flags and result classes are in
+The ``arms`` rows are made by :mod:`rigtools.campaign.observe_orders`; a row's status from its
+flags by :mod:`rigtools.campaign.observation_rows`. The table's columns, flags and result
+classes are in
 :mod:`rigtools.campaign.observation_table`; its files in
 :mod:`rigtools.campaign.observation_files`: :func:`~rigtools.campaign.write_observations`
 writes Parquet with the schema JSON in the file metadata (``rigtools.observations.schema``) and
@@ -91,18 +93,13 @@ from typing import Any, Final
 
 import numpy as np
 
-from models.geometry import mesh_frequency_Hz, speed_rpm_from_mesh_frequency
+from models.geometry import mesh_frequency_Hz
 from rigtools import __version__
-from rigtools.analysis.orders import (
-    RunUpCurve,
-    StepLevels,
-    run_up_curve_from_recording,
-    step_levels_from_recording,
-)
-from rigtools.analysis.peaks import LINE_KINDS, Peak, PeakAnalysis
+from rigtools.analysis.peak_results import LINE_KINDS, Peak, PeakAnalysis
 from rigtools.analysis.recording import ChannelAnalysis, analyse_recording
 from rigtools.analysis.speed import SpeedProfile, SpeedStep, detect_speed_steps, speed_profile
 from rigtools.campaign.manifest import CONDITION_KEYS, Campaign, CampaignRun
+from rigtools.campaign.observation_rows import ACCEL_TO_M_S2, finite_or_none, row_status
 from rigtools.campaign.observation_table import (
     FLAGS,
     SCHEMA,
@@ -110,6 +107,7 @@ from rigtools.campaign.observation_table import (
     RunObservations,
     to_frame,
 )
+from rigtools.campaign.observe_orders import HARMONICS, arms_rows
 from rigtools.errors import MissingSpeedError, RigtoolsError
 from rigtools.ingest import RunMetadata, read
 from rigtools.ingest.reader import versions
@@ -119,18 +117,12 @@ __all__ = ["observations_metadata", "observe_campaign", "observe_recording", "ob
            "read_run"]
 
 
-#: Acceleration units and their factor to m/s^2.
-_ACCEL_TO_M_S2: Final[dict[str, float]] = {
-    "m/s^2": 1.0, "m/s2": 1.0, "m/s²": 1.0, "m s-2": 1.0, "m*s^-2": 1.0, "m.s-2": 1.0,
-    "mm/s^2": 1e-3, "mm/s2": 1e-3, "g": 9.80665, "g0": 9.80665, "gn": 9.80665,
-}
 _TORQUE_TO_NM: Final[dict[str, float]] = {
     "N.m": 1.0, "Nm": 1.0, "N m": 1.0, "N·m": 1.0, "N*m": 1.0, "kN.m": 1e3, "kNm": 1e3,
 }
 _TEMPERATURE_OFFSET_C: Final[dict[str, float]] = {
     "degC": 0.0, "°C": 0.0, "C": 0.0, "deg C": 0.0, "celsius": 0.0, "K": -273.15,
 }
-_HARMONICS: Final = (1, 2, 3)
 #: Lines that flag the mode they sit on ``at_mesh_line``.
 _MESH_LINES: Final = ("mesh_harmonic", "mesh_sideband", "shaft_harmonic")
 #: The MCAP reader's notes on a sample rate estimated from the stamps, and on samples moved.
@@ -147,28 +139,6 @@ _MAX_DRIFT_PPM: Final = 100.0
 
 # --------------------------------------------------------------------------------------------
 # one run
-
-
-def _finite(v: Any) -> float | None:
-    if v is None:
-        return None
-    f = float(v)
-    return f if math.isfinite(f) else None
-
-
-def _status(row: dict[str, Any]) -> dict[str, Any]:
-    """Fill ``quality_flags``, the flag columns and ``status`` from the row's ``_flags``."""
-    flags = list(dict.fromkeys(row.pop("_flags", [])))
-    row["quality_flags"] = ";".join(flags)
-    row["flag_gaps"] = "gaps" in flags
-    row["flag_clipping"] = "clipping" in flags
-    row["flag_windows_dropped"] = "windows_dropped" in flags
-    if row.get("quantity") in ("natural_frequency", "arms"):
-        row["flag_low_snr"] = "low_snr" in flags
-    if row.get("status") != "failed":
-        row["status"] = "flagged" if flags else "ok"
-    row.setdefault("message", "")
-    return row
 
 
 def _signal_mean(rec: Recording, name: str, key: str) -> tuple[float | None, str | None]:
@@ -204,7 +174,7 @@ def _failed_run(base: dict[str, Any], run: CampaignRun, reason: str) -> RunObser
     msg = f"{run.file}: {reason}" if str(run.file) not in reason else reason
     row = {**base, "quantity": "run", "status": "failed", "message": msg,
            "_flags": ["run_failed"]}
-    return RunObservations(run.id, str(run.file), (_status(row),), analysed=False, error=msg)
+    return RunObservations(run.id, str(run.file), (row_status(row),), analysed=False, error=msg)
 
 
 def _base_row(campaign: Campaign, run: CampaignRun) -> dict[str, Any]:
@@ -367,8 +337,8 @@ def _observe_recording(campaign: Campaign, run: CampaignRun, rec: Recording,
         msg = (f"channel {c!r} named in {where} is not in the recording (it holds: "
                f"{', '.join(sorted(rec.channels)) or 'none'})")
         notes.append(msg)
-        rows.append(_status({**base, "channel": c, "quantity": "rms", "status": "failed",
-                             "message": msg, "_flags": ["channel_missing"]}))
+        rows.append(row_status({**base, "channel": c, "quantity": "rms", "status": "failed",
+                                "message": msg, "_flags": ["channel_missing"]}))
     analysis = analyse_recording(
         rec, channels=names, nperseg=a.nperseg, mesh_frequency_Hz=f_mesh,
         shaft_frequencies_Hz=shafts, prominence_dB=a.prominence_dB, f_range_Hz=a.f_range_Hz,
@@ -394,8 +364,8 @@ def _observe_recording(campaign: Campaign, run: CampaignRun, rec: Recording,
         if ca.error:
             notes.append(ca.error)
         if s.speed is not None and ok:
-            rows.extend(_arms_rows(base, rec, name, ch_rows[0], profile, speed_error, steps,
-                                   z_tracked, z1, t0, campaign))
+            rows.extend(arms_rows(base, rec, name, ch_rows[0], profile, speed_error, steps,
+                                  z_tracked, z1, t0, campaign))
 
     # the run row
     rep = rec.report
@@ -424,11 +394,11 @@ def _observe_recording(campaign: Campaign, run: CampaignRun, rec: Recording,
                "no channel could be analysed")
         run_row.update(status="failed", _flags=[*run_flags, "run_failed"],
                        message="; ".join([why, *notes]))
-        out = (_status(run_row), *rows)
+        out = (row_status(run_row), *rows)
         return RunObservations(run.id, str(run.file), out, analysed=False,
                                error=f"{run.file}: {run_row['message']}",
                                warnings=warnings, spectra=spectra)
-    return RunObservations(run.id, str(run.file), (_status(run_row), *rows), analysed=True,
+    return RunObservations(run.id, str(run.file), (row_status(run_row), *rows), analysed=True,
                            warnings=warnings, spectra=spectra)
 
 
@@ -541,7 +511,7 @@ def _channel_rows(base: dict[str, Any], rec: Recording, ca: ChannelAnalysis, cam
         flags.append("constant")
     if q.too_short:
         flags.append("too_short")
-    factor = _ACCEL_TO_M_S2.get(ca.unit.strip())
+    factor = ACCEL_TO_M_S2.get(ca.unit.strip())
     if factor is None:
         flags.append("unit_not_acceleration")
     gaps = [g for g in rec.report.gaps if g.channel == ca.name]
@@ -552,11 +522,11 @@ def _channel_rows(base: dict[str, Any], rec: Recording, ca: ChannelAnalysis, cam
     msgs = list(q.messages)
     if factor is None:
         msgs.append(f"unit {ca.unit!r} is not an acceleration unit rigtools converts to m/s^2 "
-                    f"({', '.join(_ACCEL_TO_M_S2)}): RMS and Arms left empty")
+                    f"({', '.join(ACCEL_TO_M_S2)}): RMS and Arms left empty")
     rms = {**common, "quantity": "rms", "_flags": list(flags)}
     if ca.spectrum is None or ca.rms is None:
         rms.update(status="failed", message=ca.error or "; ".join(msgs) or "not analysed")
-        return [_status(rms)], False
+        return [row_status(rms)], False
     rms.update(
         n_windows=q.n_windows, n_segments_dropped=q.n_segments_dropped,
         n_samples_dropped=q.n_samples_dropped,
@@ -576,7 +546,7 @@ def _channel_rows(base: dict[str, Any], rec: Recording, ca: ChannelAnalysis, cam
         if not ca.peaks.structural:
             rms["_flags"].append("no_structural_peak")
     rms["message"] = "; ".join(msgs)
-    return [_status(r) for r in rows], True
+    return [row_status(r) for r in rows], True
 
 
 def _line_name(pk: Peak) -> str:
@@ -618,10 +588,10 @@ def _peak_rows(common: dict[str, Any], ca: ChannelAnalysis, pa: PeakAnalysis,
             pmsg.append(speed_note)
         rows.append({
             **common, "quantity": "natural_frequency", "mode_index": i,
-            "f_n_Hz": _finite(m.f_n_Hz), "f_n_std_Hz": _finite(m.f_n_std_Hz),
-            "zeta": _finite(m.zeta), "zeta_std": _finite(m.zeta_std),
-            "zeta_half_power": _finite(m.zeta_half_power),
-            "zeta_half_power_std": _finite(m.zeta_half_power_std),
+            "f_n_Hz": finite_or_none(m.f_n_Hz), "f_n_std_Hz": finite_or_none(m.f_n_std_Hz),
+            "zeta": finite_or_none(m.zeta), "zeta_std": finite_or_none(m.zeta_std),
+            "zeta_half_power": finite_or_none(m.zeta_half_power),
+            "zeta_half_power_std": finite_or_none(m.zeta_half_power_std),
             "peak_kind": pk.kind, "response": response or m.response,
             "prominence_dB": float(pk.prominence_dB), "snr_dB": float(pk.prominence_dB),
             "message": "; ".join(pmsg), "_flags": pflags})
@@ -637,159 +607,6 @@ def _peak_rows(common: dict[str, Any], ca: ChannelAnalysis, pa: PeakAnalysis,
             **common, "quantity": "line", "mode_index": q.on_mode, "f_Hz": float(q.f_Hz),
             "peak_kind": q.kind, "prominence_dB": float(q.prominence_dB),
             "message": "; ".join(lmsg), "_flags": lflags})
-    return rows
-
-
-def _order_floor_snr_db(sl: StepLevels, i: int) -> float | None:
-    """Weakest mesh harmonic of step ``i`` over the order-spectrum floor, same bandwidth (dB).
-
-    The floor is the median power per bin over orders 0.5 z .. 3.5 z away from the harmonics
-    (and below the passband), scaled to the ``2 m + 1`` bins a harmonic is read over and
-    divided by the window's noise bandwidth, as the harmonic's amplitude is.
-    """
-    spec = sl.spectra[i]
-    if spec is None:
-        return None
-    o, amp = spec.order, spec.amplitude
-    z = sl.z1
-    band = 1  # step_levels' default band_bins
-    sel = (o >= 0.5 * z) & (o <= 3.5 * z) & (o <= spec.max_valid_order)
-    for h in sl.harmonics:
-        sel &= np.abs(o - h * z) > (band + 2) / spec.revolutions
-    if np.count_nonzero(sel) < 8:
-        return None
-    floor = math.sqrt(float(np.median(amp[sel] ** 2)) * (2 * band + 1) / spec.enbw_bins)
-    a = sl.amplitude[i]
-    a = a[np.isfinite(a)]
-    if not a.size or floor <= 0:
-        return None
-    return float(20 * np.log10(np.min(a) / floor))
-
-
-def _arms_rows(base: dict[str, Any], rec: Recording, name: str, rms_row: dict[str, Any],
-               profile: SpeedProfile | None, speed_error: str | None,
-               steps: tuple[SpeedStep, ...], z_tracked: int, z1: int, t0: float,
-               campaign: Campaign) -> list[dict[str, Any]]:
-    a = campaign.analysis
-    factor = _ACCEL_TO_M_S2.get(rec.channels[name].unit.strip())
-    keep = ("n_samples", "n_invalid", "n_clipped")
-    common = {**base, "channel": name, "quantity": "arms",
-              **{k: rms_row.get(k) for k in keep}}
-    ch_flags = ["clipping"] if rms_row["flag_clipping"] else []
-    if profile is None:
-        return [_status({**common, "status": "failed", "message": speed_error or "no speed",
-                         "_flags": ["speed_missing"]})]
-    if factor is None:
-        return [_status({**common, "status": "failed", "_flags": ["unit_not_acceleration"],
-                         "message": f"unit {rec.channels[name].unit!r} is not an acceleration"})]
-    if not steps:
-        return _ramp_rows(common, rec, name, profile, ch_flags, factor, z_tracked, z1, t0,
-                          campaign)
-    try:
-        sl = step_levels_from_recording(rec, name, profile, z_tracked, steps=steps,
-                                        harmonics=_HARMONICS, revs_per_block=a.revs_per_block)
-    except (RigtoolsError, ValueError) as exc:
-        return [_status({**common, "status": "failed", "message": f"Arms per step: {exc}",
-                         "_flags": ["arms_failed"]})]
-    rows = []
-    for i, st in enumerate(sl.steps):
-        flags = list(ch_flags)
-        msg = []
-        n_gaps = int(sl.n_gaps[i])
-        if n_gaps:
-            flags += ["gaps", "windows_dropped"]
-            msg.append(f"{n_gaps} stretch(es) of invalid samples or unknown speed in the step")
-        row = {**common, "segment": "step", "step_index": i, "step_start_s": st.start_s - t0,
-               "step_stop_s": st.stop_s - t0, "n_gaps": n_gaps,
-               "n_windows": int(sl.n_blocks[i])}
-        if sl.n_blocks[i] == 0:
-            flags.append("step_without_block")
-            rows.append(_status({**row, "status": "failed", "_flags": flags,
-                                 "message": "; ".join([*msg, "no whole block of "
-                                                       f"{sl.revs_per_block} revolutions"])}))
-            continue
-        amp = sl.amplitude[i] * factor
-        if not np.all(np.isfinite(amp)):
-            flags.append("above_passband")
-            msg.append("a mesh harmonic lies above the resampler's passband (NaN)")
-        snr = _order_floor_snr_db(sl, i)
-        if snr is not None and snr < a.low_snr_dB:
-            flags.append("low_snr")
-            msg.append(f"weakest mesh harmonic {snr:.1f} dB over the floor < {a.low_snr_dB:g} dB")
-        f_mesh = float(sl.mesh_frequency_Hz[i])
-        rows.append(_status({
-            **row, "mesh_frequency_Hz": f_mesh,
-            "step_speed_rpm": float(speed_rpm_from_mesh_frequency(f_mesh, z1)),
-            "a1_m_s2": _finite(amp[0]), "a2_m_s2": _finite(amp[1]), "a3_m_s2": _finite(amp[2]),
-            "arms_m_s2": _finite(sl.arms[i] * factor), "snr_dB": _finite(snr),
-            "message": "; ".join(msg), "_flags": flags}))
-    return rows
-
-
-def _ramp_snr_db(rc: RunUpCurve, i: int) -> float | None:
-    """:func:`_order_floor_snr_db` for window ``i`` of a run-up curve."""
-    o = np.asarray(rc.spectra.axis, np.float64)
-    amp = np.asarray(rc.spectra.amplitude, np.float64)
-    amp = amp[i] if amp.shape[0] == len(rc.time_s) else amp[:, i]
-    z, band, revs = rc.z1, 1, rc.revs_per_window
-    n = revs * rc.samples_per_rev
-    w = np.hanning(n + 1)[:-1] if n > 1 else np.ones(1)
-    enbw = float(n * np.sum(w**2) / np.sum(w) ** 2)
-    sel = (o >= 0.5 * z) & (o <= 3.5 * z) & np.isfinite(amp)
-    for h in rc.harmonics:
-        sel &= np.abs(o - h * z) > (band + 2) / revs
-    if np.count_nonzero(sel) < 8:
-        return None
-    floor = math.sqrt(float(np.median(amp[sel] ** 2)) * (2 * band + 1) / enbw)
-    a = rc.amplitude[i]
-    a = a[np.isfinite(a)]
-    if not a.size or floor <= 0:
-        return None
-    return float(20 * np.log10(np.min(a) / floor))
-
-
-def _ramp_rows(common: dict[str, Any], rec: Recording, name: str, profile: SpeedProfile,
-               ch_flags: list[str], factor: float, z_tracked: int, z1: int, t0: float,
-               campaign: Campaign) -> list[dict[str, Any]]:
-    """Arms per window along a speed without plateau (a ramped run-up), ``segment = "ramp"``."""
-    a = campaign.analysis
-    try:
-        rc = run_up_curve_from_recording(rec, name, profile, z_tracked, harmonics=_HARMONICS,
-                                         revs_per_window=a.revs_per_block)
-    except (RigtoolsError, ValueError) as exc:
-        return [_status({**common, "segment": "ramp", "status": "failed",
-                         "message": f"no speed plateau; Arms along the ramp: {exc}",
-                         "_flags": ["arms_failed"]})]
-    if not len(rc.time_s):
-        dropped = ", ".join(f"{n} {why}" for why, n in sorted(rc.dropped.items()))
-        return [_status({**common, "segment": "ramp", "status": "failed",
-                         "message": f"no speed plateau, and no whole window of "
-                         f"{rc.revs_per_window} revolutions along the ramp"
-                         + (f" (dropped: {dropped})" if dropped else ""),
-                         "_flags": ["no_speed_step", "arms_failed"]})]
-    rows = []
-    for i in range(len(rc.time_s)):
-        flags = list(ch_flags)
-        msg = []
-        amp = rc.amplitude[i] * factor
-        if not np.all(np.isfinite(amp)):
-            flags.append("above_passband")
-            msg.append("a mesh harmonic lies above the resampler's passband (NaN)")
-        snr = _ramp_snr_db(rc, i)
-        if snr is not None and snr < a.low_snr_dB:
-            flags.append("low_snr")
-            msg.append(f"weakest mesh harmonic {snr:.1f} dB over the floor < {a.low_snr_dB:g} dB")
-        f_mesh = float(rc.mesh_frequency_Hz[i])  # z_tracked n_tracked / 60 = z1 n_pinion / 60
-        half = 0.5 * rc.revs_per_window * 60.0 / float(rc.speed_rpm[i])
-        t = float(rc.time_s[i]) - t0
-        rows.append(_status({
-            **common, "segment": "ramp", "step_index": i, "step_start_s": t - half,
-            "step_stop_s": t + half, "n_windows": 1, "n_gaps": 0,
-            "mesh_frequency_Hz": f_mesh,
-            "step_speed_rpm": float(speed_rpm_from_mesh_frequency(f_mesh, z1)),
-            "a1_m_s2": _finite(amp[0]), "a2_m_s2": _finite(amp[1]), "a3_m_s2": _finite(amp[2]),
-            "arms_m_s2": _finite(rc.arms[i] * factor), "snr_dB": _finite(snr),
-            "message": "; ".join(msg), "_flags": flags}))
     return rows
 
 
@@ -845,7 +662,7 @@ def observations_metadata(campaign: Campaign, runs: Sequence[Mapping[str, Any]]
         "campaign": campaign.to_dict(),
         "gear": {"name": campaign.gear.name, "z1": campaign.pinion_teeth,
                  "z2": campaign.wheel_teeth},
-        "harmonics": list(_HARMONICS),
+        "harmonics": list(HARMONICS),
         "max_mesh_order": campaign.analysis.max_mesh_order,
         "flags": FLAGS,
         "versions": versions(),

@@ -30,7 +30,7 @@ import math
 from collections.abc import Sequence
 from typing import Any, Final
 
-from rigtools.analysis.peaks import ModalEstimate, Peak
+from rigtools.analysis.peak_results import ModalEstimate, Peak
 from rigtools.analysis.recording import ChannelAnalysis, RecordingAnalysis
 
 __all__ = [

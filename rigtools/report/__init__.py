@@ -1,9 +1,11 @@
 """The validation report: ``report.json`` and a self-contained ``report.html`` from an OUTDIR.
 
-Modules: ``inputs`` (the stage files read into plain dataclasses), ``content`` (the report.json
-document: verdict, data quality, runs, model versus experiment, convergence, provenance),
-``figures`` (matplotlib figures drawn from the content), ``html`` (the jinja2 page, autoescaped),
-``atomic`` (temporary file, fsync, rename), ``build`` (:func:`build_report`), ``errors``.
+Modules: ``inputs`` (the stage files read into plain dataclasses), ``content`` (data quality,
+runs, provenance, and the assembled report.json document), ``assessment`` (the calibration
+judged against the campaign's checks: verdict, model versus experiment, convergence, truth
+comparison), ``values`` (stage-JSON values turned into report values), ``figures``
+(matplotlib figures drawn from the content), ``html`` (the jinja2 page, autoescaped), ``atomic``
+(temporary file, fsync, rename), ``build`` (:func:`build_report`), ``errors``.
 """
 
 from rigtools.report.build import REPORT_HTML, REPORT_JSON, ReportPaths, build_report

@@ -28,7 +28,7 @@ import numpy as np
 import pytest
 
 from rigtools.analysis import analyse_peaks, classify_frequency, welch_psd
-from rigtools.analysis.peaks import MAX_MESH_ORDER
+from rigtools.analysis.mesh_lines import MAX_MESH_ORDER
 from rigtools.errors import SignalError
 
 FS = ms.FS_HZ

@@ -483,7 +483,7 @@ def test_short_records_give_an_honest_damping(duration_s, nperseg):
 
 def test_a_noise_spike_is_not_broad():
     """A fit whose damping is within 2 sigma of the resolution limit is not structural."""
-    from rigtools.analysis.peaks import ModalEstimate
+    from rigtools.analysis.peak_results import ModalEstimate
 
     x = np.random.default_rng(3).normal(size=int(2 * FS))
     s = welch_psd(x, FS, nperseg=8192)

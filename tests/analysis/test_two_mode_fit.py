@@ -44,7 +44,7 @@ import pytest
 from modal_signals import ModalSignal, Mode
 
 from rigtools.analysis import FIT_FLAGS, analyse_peaks, analyse_recording, welch_psd
-from rigtools.analysis.peaks import ModalEstimate, PeakAnalysis
+from rigtools.analysis.peak_results import ModalEstimate, PeakAnalysis
 from rigtools.demo.campaign import generate_demo_campaign
 from rigtools.ingest import read
 

@@ -16,8 +16,12 @@ from models.dynamics import (
     MeshStage,
     SDOFModel,
     TwoStageModel,
+    integrate,
+    parallel,
     periods,
+    sdof_kernels,
     static_state,
+    sweep,
     two_stage,
     two_stage_from_gear_sets,
     two_stage_kernels,
@@ -227,7 +231,7 @@ def test_diverging_response_is_flagged_not_reported_as_a_number():
 
 
 def test_cached_kernels_call_only_compiled_functions_of_their_own_file():
-    """Every cached two-stage kernel calls compiled functions of its own file only.
+    """Every cached kernel (two-stage and SDOF) calls compiled functions of its own file only.
 
     numba's disk cache checks only the kernel's own file: a cached kernel that inlines a
     compiled function from another file keeps the stale copy after that file is edited. All
@@ -236,7 +240,8 @@ def test_cached_kernels_call_only_compiled_functions_of_their_own_file():
     from numba.core.dispatcher import Dispatcher
 
     checked = 0
-    for mod in (two_stage, two_stage_maps, two_stage_kernels):
+    for mod in (two_stage, two_stage_maps, two_stage_kernels, sdof_kernels, integrate, sweep,
+                parallel):
         for obj in vars(mod).values():
             if not (isinstance(obj, Dispatcher) and type(obj._cache).__name__ != "NullCache"):
                 continue

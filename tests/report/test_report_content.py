@@ -11,7 +11,7 @@ import report_cases
 from page_checks import scan
 
 from rigtools.report import ReportPaths
-from rigtools.report.content import DEFAULT_TOLERANCES
+from rigtools.report.assessment import DEFAULT_TOLERANCES
 from rigtools.schemas import iter_errors
 
 

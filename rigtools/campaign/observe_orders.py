@@ -1,0 +1,222 @@
+r"""The arms rows of the observations table: mesh-harmonic amplitudes per speed step or window.
+
+For each accelerometer channel of a run with ``[sensors] speed``, :func:`arms_rows` gives one
+``arms`` row per speed step (``segment = "step"``,
+:func:`~rigtools.analysis.orders.step_levels_from_recording`) or, when the speed has no
+plateau (a ramped run-up), one per window of ``revs_per_block`` revolutions along the ramp
+(``segment = "ramp"``, :func:`~rigtools.analysis.orders.run_up_curve_from_recording`): the
+speed, the mesh frequency, the amplitudes of the mesh harmonics :data:`HARMONICS` and
+:math:`A_{rms} = \sqrt{A_1^2 + A_2^2 + A_3^2}`, flagged ``low_snr`` when the weakest harmonic
+stands less than ``[analysis] low_snr_dB`` over the order-spectrum floor (same bandwidth).
+The other rows of a run are made by :mod:`rigtools.campaign.observe`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Final
+
+import numpy as np
+
+from models.geometry import speed_rpm_from_mesh_frequency
+from rigtools.analysis.orders import (
+    RunUpCurve,
+    StepLevels,
+    run_up_curve_from_recording,
+    step_levels_from_recording,
+)
+from rigtools.analysis.speed import SpeedProfile, SpeedStep
+from rigtools.campaign.manifest import Campaign
+from rigtools.campaign.observation_rows import ACCEL_TO_M_S2, finite_or_none, row_status
+from rigtools.errors import RigtoolsError
+from rigtools.ingest.recording import Recording
+
+__all__ = ["HARMONICS", "arms_rows"]
+
+#: The mesh harmonics whose amplitudes make Arms.
+HARMONICS: Final = (1, 2, 3)
+
+
+def _order_floor_snr_db(sl: StepLevels, i: int) -> float | None:
+    """Weakest mesh harmonic of step ``i`` over the order-spectrum floor, same bandwidth (dB).
+
+    The floor is the median power per bin over orders 0.5 z .. 3.5 z away from the harmonics
+    (and below the passband), scaled to the ``2 m + 1`` bins a harmonic is read over and
+    divided by the window's noise bandwidth, as the harmonic's amplitude is.
+    """
+    spec = sl.spectra[i]
+    if spec is None:
+        return None
+    o, amp = spec.order, spec.amplitude
+    z = sl.z1
+    band = 1  # step_levels' default band_bins
+    sel = (o >= 0.5 * z) & (o <= 3.5 * z) & (o <= spec.max_valid_order)
+    for h in sl.harmonics:
+        sel &= np.abs(o - h * z) > (band + 2) / spec.revolutions
+    if np.count_nonzero(sel) < 8:
+        return None
+    floor = math.sqrt(float(np.median(amp[sel] ** 2)) * (2 * band + 1) / spec.enbw_bins)
+    a = sl.amplitude[i]
+    a = a[np.isfinite(a)]
+    if not a.size or floor <= 0:
+        return None
+    return float(20 * np.log10(np.min(a) / floor))
+
+
+def arms_rows(base: dict[str, Any], rec: Recording, name: str, rms_row: dict[str, Any],
+              profile: SpeedProfile | None, speed_error: str | None,
+              steps: tuple[SpeedStep, ...], z_tracked: int, z1: int, t0: float,
+              campaign: Campaign) -> list[dict[str, Any]]:
+    """The arms rows of a channel: Arms per speed step, or along the ramp when none.
+
+    Parameters
+    ----------
+    base : dict
+        The run's base row (campaign, run, conditions, provenance).
+    rec : Recording
+    name : str
+        The accelerometer channel.
+    rms_row : dict
+        The channel's finished ``rms`` row (its counts and clipping flag carry over).
+    profile : SpeedProfile or None
+        The run's speed profile; None when the speed signal is unusable.
+    speed_error : str or None
+        Why ``profile`` is None.
+    steps : tuple of SpeedStep
+        The speed plateaus; empty: one row per window along the ramp (:func:`_ramp_rows`).
+    z_tracked, z1 : int
+        Teeth of the shaft the speed signal tracks, and of the pinion.
+    t0 : float
+        Start of the recording (s); step times are given from it.
+    campaign : Campaign
+
+    Returns
+    -------
+    list of dict
+        Finished rows (:func:`~rigtools.campaign.observation_rows.row_status`); a failed row
+        when the speed is missing, the unit is not an acceleration or the order analysis fails.
+    """
+    a = campaign.analysis
+    factor = ACCEL_TO_M_S2.get(rec.channels[name].unit.strip())
+    keep = ("n_samples", "n_invalid", "n_clipped")
+    common = {**base, "channel": name, "quantity": "arms",
+              **{k: rms_row.get(k) for k in keep}}
+    ch_flags = ["clipping"] if rms_row["flag_clipping"] else []
+    if profile is None:
+        return [row_status({**common, "status": "failed", "message": speed_error or "no speed",
+                            "_flags": ["speed_missing"]})]
+    if factor is None:
+        return [row_status({**common, "status": "failed", "_flags": ["unit_not_acceleration"],
+                            "message": f"unit {rec.channels[name].unit!r} is not an acceleration"})]
+    if not steps:
+        return _ramp_rows(common, rec, name, profile, ch_flags, factor, z_tracked, z1, t0,
+                          campaign)
+    try:
+        sl = step_levels_from_recording(rec, name, profile, z_tracked, steps=steps,
+                                        harmonics=HARMONICS, revs_per_block=a.revs_per_block)
+    except (RigtoolsError, ValueError) as exc:
+        return [row_status({**common, "status": "failed", "message": f"Arms per step: {exc}",
+                            "_flags": ["arms_failed"]})]
+    rows = []
+    for i, st in enumerate(sl.steps):
+        flags = list(ch_flags)
+        msg = []
+        n_gaps = int(sl.n_gaps[i])
+        if n_gaps:
+            flags += ["gaps", "windows_dropped"]
+            msg.append(f"{n_gaps} stretch(es) of invalid samples or unknown speed in the step")
+        row = {**common, "segment": "step", "step_index": i, "step_start_s": st.start_s - t0,
+               "step_stop_s": st.stop_s - t0, "n_gaps": n_gaps,
+               "n_windows": int(sl.n_blocks[i])}
+        if sl.n_blocks[i] == 0:
+            flags.append("step_without_block")
+            rows.append(row_status({**row, "status": "failed", "_flags": flags,
+                                    "message": "; ".join([*msg, "no whole block of "
+                                                          f"{sl.revs_per_block} revolutions"])}))
+            continue
+        amp = sl.amplitude[i] * factor
+        if not np.all(np.isfinite(amp)):
+            flags.append("above_passband")
+            msg.append("a mesh harmonic lies above the resampler's passband (NaN)")
+        snr = _order_floor_snr_db(sl, i)
+        if snr is not None and snr < a.low_snr_dB:
+            flags.append("low_snr")
+            msg.append(f"weakest mesh harmonic {snr:.1f} dB over the floor < {a.low_snr_dB:g} dB")
+        f_mesh = float(sl.mesh_frequency_Hz[i])
+        rows.append(row_status({
+            **row, "mesh_frequency_Hz": f_mesh,
+            "step_speed_rpm": float(speed_rpm_from_mesh_frequency(f_mesh, z1)),
+            "a1_m_s2": finite_or_none(amp[0]), "a2_m_s2": finite_or_none(amp[1]),
+            "a3_m_s2": finite_or_none(amp[2]),
+            "arms_m_s2": finite_or_none(sl.arms[i] * factor), "snr_dB": finite_or_none(snr),
+            "message": "; ".join(msg), "_flags": flags}))
+    return rows
+
+
+def _ramp_snr_db(rc: RunUpCurve, i: int) -> float | None:
+    """:func:`_order_floor_snr_db` for window ``i`` of a run-up curve."""
+    o = np.asarray(rc.spectra.axis, np.float64)
+    amp = np.asarray(rc.spectra.amplitude, np.float64)
+    amp = amp[i] if amp.shape[0] == len(rc.time_s) else amp[:, i]
+    z, band, revs = rc.z1, 1, rc.revs_per_window
+    n = revs * rc.samples_per_rev
+    w = np.hanning(n + 1)[:-1] if n > 1 else np.ones(1)
+    enbw = float(n * np.sum(w**2) / np.sum(w) ** 2)
+    sel = (o >= 0.5 * z) & (o <= 3.5 * z) & np.isfinite(amp)
+    for h in rc.harmonics:
+        sel &= np.abs(o - h * z) > (band + 2) / revs
+    if np.count_nonzero(sel) < 8:
+        return None
+    floor = math.sqrt(float(np.median(amp[sel] ** 2)) * (2 * band + 1) / enbw)
+    a = rc.amplitude[i]
+    a = a[np.isfinite(a)]
+    if not a.size or floor <= 0:
+        return None
+    return float(20 * np.log10(np.min(a) / floor))
+
+
+def _ramp_rows(common: dict[str, Any], rec: Recording, name: str, profile: SpeedProfile,
+               ch_flags: list[str], factor: float, z_tracked: int, z1: int, t0: float,
+               campaign: Campaign) -> list[dict[str, Any]]:
+    """Arms per window along a speed without plateau (a ramped run-up), ``segment = "ramp"``."""
+    a = campaign.analysis
+    try:
+        rc = run_up_curve_from_recording(rec, name, profile, z_tracked, harmonics=HARMONICS,
+                                         revs_per_window=a.revs_per_block)
+    except (RigtoolsError, ValueError) as exc:
+        return [row_status({**common, "segment": "ramp", "status": "failed",
+                            "message": f"no speed plateau; Arms along the ramp: {exc}",
+                            "_flags": ["arms_failed"]})]
+    if not len(rc.time_s):
+        dropped = ", ".join(f"{n} {why}" for why, n in sorted(rc.dropped.items()))
+        return [row_status({**common, "segment": "ramp", "status": "failed",
+                            "message": f"no speed plateau, and no whole window of "
+                            f"{rc.revs_per_window} revolutions along the ramp"
+                            + (f" (dropped: {dropped})" if dropped else ""),
+                            "_flags": ["no_speed_step", "arms_failed"]})]
+    rows = []
+    for i in range(len(rc.time_s)):
+        flags = list(ch_flags)
+        msg = []
+        amp = rc.amplitude[i] * factor
+        if not np.all(np.isfinite(amp)):
+            flags.append("above_passband")
+            msg.append("a mesh harmonic lies above the resampler's passband (NaN)")
+        snr = _ramp_snr_db(rc, i)
+        if snr is not None and snr < a.low_snr_dB:
+            flags.append("low_snr")
+            msg.append(f"weakest mesh harmonic {snr:.1f} dB over the floor < {a.low_snr_dB:g} dB")
+        f_mesh = float(rc.mesh_frequency_Hz[i])  # z_tracked n_tracked / 60 = z1 n_pinion / 60
+        half = 0.5 * rc.revs_per_window * 60.0 / float(rc.speed_rpm[i])
+        t = float(rc.time_s[i]) - t0
+        rows.append(row_status({
+            **common, "segment": "ramp", "step_index": i, "step_start_s": t - half,
+            "step_stop_s": t + half, "n_windows": 1, "n_gaps": 0,
+            "mesh_frequency_Hz": f_mesh,
+            "step_speed_rpm": float(speed_rpm_from_mesh_frequency(f_mesh, z1)),
+            "a1_m_s2": finite_or_none(amp[0]), "a2_m_s2": finite_or_none(amp[1]),
+            "a3_m_s2": finite_or_none(amp[2]),
+            "arms_m_s2": finite_or_none(rc.arms[i] * factor), "snr_dB": finite_or_none(snr),
+            "message": "; ".join(msg), "_flags": flags}))
+    return rows
+
