@@ -19,3 +19,24 @@ def realdata() -> Path:
     if not REALDATA.is_dir():
         pytest.skip(f"third-party data folder {REALDATA} is absent")
     return REALDATA
+
+
+#: Test folders whose session fixtures (a whole pipeline run, a calibration) several files share:
+#: under pytest-xdist each runs on one worker, so those fixtures are computed once.
+SHARED_FIXTURE_FOLDERS = ("calibration", "pipeline", "report")
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Group the tests for ``--dist loadgroup``: a shared-fixture folder, else the file."""
+    if not config.pluginmanager.hasplugin("xdist"):
+        return
+    tests = Path(__file__).resolve().parent
+    for item in items:
+        path = Path(str(item.path)).resolve()
+        try:
+            rel = path.relative_to(tests)
+        except ValueError:      # doctests of the packages
+            rel = path
+        top = rel.parts[0] if len(rel.parts) > 1 else ""
+        group = top if top in SHARED_FIXTURE_FOLDERS else rel.as_posix()
+        item.add_marker(pytest.mark.xdist_group(name=group))

@@ -17,6 +17,10 @@
 * :mod:`models.dynamics.dimensional`: equivalent mass, omega_n, Lambda <-> Hz <-> rpm, DTE in um;
 * :mod:`models.dynamics.parallel`: :func:`sweep_many`, independent sweeps in parallel (numba
   prange);
+* :mod:`models.dynamics.walkers`: many parameter sets ("walkers": zeta, stiffness scale,
+  fluctuation scale, backlash) of one FVMS/VVMS/LSTE model swept along a time-ordered run-up
+  path in one compiled call (a :class:`CycleBank` of cycles at T / s, Newton shooting with the
+  settling fallback), its plain per-walker reference and their agreement (issue 20);
 * :mod:`models.dynamics.two_stage`: the two-stage torsional model of seed 001 (two relative
   DTE coordinates, coupled through the intermediate shaft), RK4 and steady response, and the
   seed's six-state system with a flexible intermediate shaft as a plain reference;
@@ -123,6 +127,15 @@ from models.dynamics.two_stage_maps import (
     thermal_stiffness_component,
     two_stage_at_temperature,
 )
+from models.dynamics.walkers import (
+    CycleBank,
+    SweepAgreement,
+    WalkerSweep,
+    cycle_bank,
+    sweep_agreement,
+    sweep_walkers,
+    sweep_walkers_reference,
+)
 
 __all__ = [
     "BACK_FLANKS",
@@ -133,6 +146,7 @@ __all__ = [
     "BackFlank",
     "Bifurcation",
     "ContactCycle",
+    "CycleBank",
     "DimensionalScaling",
     "DimensionalSweep",
     "DynamicModel",
@@ -144,6 +158,7 @@ __all__ = [
     "SDOFModel",
     "Settled",
     "SixStateSystem",
+    "SweepAgreement",
     "SweepJob",
     "SweepResult",
     "ThermalStiffness",
@@ -154,11 +169,13 @@ __all__ = [
     "TwoStageModel",
     "TwoStageResponse",
     "TwoStageThermalSetup",
+    "WalkerSweep",
     "back_flank_offset",
     "bifurcation_over_frequency",
     "bifurcation_over_temperature",
     "build_tribo_dynamics",
     "contact_cycle",
+    "cycle_bank",
     "dead_zone",
     "dead_zone_potential",
     "dimensional_scaling",
@@ -189,8 +206,11 @@ __all__ = [
     "static_state",
     "steady_state",
     "sweep",
+    "sweep_agreement",
     "sweep_many",
     "sweep_up_down",
+    "sweep_walkers",
+    "sweep_walkers_reference",
     "thermal_stiffness_component",
     "to_dimensional",
     "tribo_iteration",

@@ -56,6 +56,16 @@ The compiled sweep kernel :func:`sweep_kernel` (used by :func:`models.dynamics.s
 and, in parallel over sweeps (:func:`sweep_many_kernel`), by
 :func:`models.dynamics.parallel.sweep_many`) does settle, record and the DFT of the first three
 mesh harmonics for a whole sweep in one call.
+
+Walker sweeps (:func:`walker_sweep_kernel`, behind :mod:`models.dynamics.walkers`): many
+parameter sets of one single-column model, ``prange`` over them; each builds its tables from a
+bank of curves at stiffness-scale nodes (4-point Lagrange in ``log s``, alternating parts
+scaled) and runs its time-ordered path, each point by Newton shooting on the period-1 Poincare
+map (:func:`_shoot`: RK4 on the state and the 2 x 2 variational equations, the same step as
+:func:`_step`; accepted on residual, Jury stability, a continuation guard against the previous
+point's orbit and a basin check in the orbit's Lyapunov metric along the first periods of the
+transient) with :func:`_steady` as the fallback, or by :func:`_steady` alone. The first point,
+and any point after a response that is not a settled period-1 orbit, is settled.
 """
 
 from __future__ import annotations
@@ -73,6 +83,7 @@ __all__ = [
     "settle_kernel",
     "sweep_kernel",
     "sweep_many_kernel",
+    "walker_sweep_kernel",
 ]
 
 #: Longest period (in mesh periods) that :func:`settle_kernel` recognises.
@@ -513,4 +524,430 @@ def sweep_many_kernel(
             period[s],
             poinc[s],
             entry[s],
+        )
+
+
+# --- walker-vectorised sweeps (models.dynamics.walkers) ----------------------------------------
+#: Newton iterations per point before :func:`walker_sweep_kernel` falls back to settling.
+WALKER_NEWTON: Final = 8
+#: Fraction of the linearised decrease of the orbit's Lyapunov function that one plain period
+#: from the entry state must achieve for a Newton orbit to be accepted (see walkers.py).
+_BASIN_DECREASE: Final = 0.5
+#: Continuation guard of the walker shooting: a Newton orbit's Poincare point must lie within
+#: ``WALKER_GUARD`` times the previous orbit's range (per coordinate) of the entry state, plus
+#: ``WALKER_GUARD_FLOOR`` (units of ``L``).
+WALKER_GUARD: Final = 0.5
+WALKER_GUARD_FLOOR: Final = 1e-3
+#: Plain periods of the transient the basin check may follow, and the consecutive periods that
+#: must pass it there (see :func:`_shoot`).
+WALKER_BASIN_PERIODS: Final = 8
+WALKER_BASIN_REPEATS: Final = 2
+
+
+@njit(cache=True)
+def _bank_weights(log_nodes, log_s, wts):  # pragma: no cover - compiled
+    """4-point Lagrange weights in ``log s``; returns the first node index (``wts`` filled)."""
+    m = log_nodes.size
+    i = 0
+    while i < m - 2 and log_nodes[i + 1] <= log_s:
+        i += 1
+    i0 = min(max(i - 1, 0), m - 4)
+    for a in range(4):
+        w = 1.0
+        for c in range(4):
+            if c != a:
+                w *= (log_s - log_nodes[i0 + c]) / (log_nodes[i0 + a] - log_nodes[i0 + c])
+        wts[a] = w
+    return i0
+
+
+@njit(cache=True)
+def _walker_tables(log_nodes, kbank, ebank, bbank, log_s, eps, kd, ed, kb, eb):  # pragma: no cover
+    """Fill one walker's ``(2 N, 1)`` tables from the bank rows; returns ``mean(e)``.
+
+    ``kbank``, ``ebank``, ``bbank`` are ``(J, 2 N)``: ``tilde k``, ``tilde e`` and the back
+    offset at the nodes; the alternating parts (about each interpolated row's mean) are
+    multiplied by ``eps``.
+    """
+    wts = np.empty(4)
+    i0 = _bank_weights(log_nodes, log_s, wts)
+    n2 = kbank.shape[1]
+    km = 0.0
+    em = 0.0
+    bm = 0.0
+    for j in range(n2):
+        k = 0.0
+        e = 0.0
+        g = 0.0
+        for a in range(4):
+            k += wts[a] * kbank[i0 + a, j]
+            e += wts[a] * ebank[i0 + a, j]
+            g += wts[a] * bbank[i0 + a, j]
+        kd[j, 0] = k
+        ed[j, 0] = e
+        eb[j, 0] = g
+        km += k
+        em += e
+        bm += g
+    km /= n2
+    em /= n2
+    bm /= n2
+    for j in range(n2):
+        kd[j, 0] = km + eps * (kd[j, 0] - km)
+        kb[j, 0] = kd[j, 0]
+        ed[j, 0] = em + eps * (ed[j, 0] - em)
+        eb[j, 0] = bm + eps * (eb[j, 0] - bm)
+    return em
+
+
+@njit(cache=True)
+def _acc_tangent(x, v, j, zeta, force, b, kd, ed, kb, eb):  # pragma: no cover - compiled
+    """Acceleration and tangent stiffness ``d(contact force)/dx`` of a one-column model."""
+    u = x - ed[j, 0]
+    w = x - eb[j, 0]
+    f = 0.0
+    kk = 0.0
+    if u > b:
+        f += kd[j, 0] * (u - b)
+        kk += kd[j, 0]
+    if w < -b:
+        f += kb[j, 0] * (w + b)
+        kk += kb[j, 0]
+    return force - 2.0 * zeta * v - f, kk
+
+
+@njit(cache=True)
+def _period_monodromy(x, v, zeta, force, b, kd, ed, kb, eb, h):  # pragma: no cover - compiled
+    """One period from ``(x, v)`` with RK4 on the state and its 2 x 2 variational equations.
+
+    The state update is :func:`_step`'s (same stages, same tables); returns
+    ``(x, v, m11, m12, m21, m22)`` with ``M`` the monodromy matrix of the discrete map.
+    """
+    n2 = kd.shape[0]
+    n = n2 // 2
+    p11, p12, p21, p22 = 1.0, 0.0, 0.0, 1.0
+    tz = 2.0 * zeta
+    for j in range(n):
+        j0 = 2 * j
+        j1 = j0 + 1
+        j2 = (j0 + 2) % n2
+        a1, k1 = _acc_tangent(x, v, j0, zeta, force, b, kd, ed, kb, eb)
+        q11 = p21
+        q12 = p22
+        q21 = -k1 * p11 - tz * p21
+        q22 = -k1 * p12 - tz * p22
+        x2 = x + 0.5 * h * v
+        v2 = v + 0.5 * h * a1
+        r11 = p11 + 0.5 * h * q11
+        r12 = p12 + 0.5 * h * q12
+        r21 = p21 + 0.5 * h * q21
+        r22 = p22 + 0.5 * h * q22
+        a2, k2 = _acc_tangent(x2, v2, j1, zeta, force, b, kd, ed, kb, eb)
+        s11 = r21
+        s12 = r22
+        s21 = -k2 * r11 - tz * r21
+        s22 = -k2 * r12 - tz * r22
+        x3 = x + 0.5 * h * v2
+        v3 = v + 0.5 * h * a2
+        t11 = p11 + 0.5 * h * s11
+        t12 = p12 + 0.5 * h * s12
+        t21 = p21 + 0.5 * h * s21
+        t22 = p22 + 0.5 * h * s22
+        a3, k3 = _acc_tangent(x3, v3, j1, zeta, force, b, kd, ed, kb, eb)
+        u11 = t21
+        u12 = t22
+        u21 = -k3 * t11 - tz * t21
+        u22 = -k3 * t12 - tz * t22
+        x4 = x + h * v3
+        v4 = v + h * a3
+        w11 = p11 + h * u11
+        w12 = p12 + h * u12
+        w21 = p21 + h * u21
+        w22 = p22 + h * u22
+        a4, k4 = _acc_tangent(x4, v4, j2, zeta, force, b, kd, ed, kb, eb)
+        z11 = w21
+        z12 = w22
+        z21 = -k4 * w11 - tz * w21
+        z22 = -k4 * w12 - tz * w22
+        x = x + h / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4)
+        v = v + h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
+        p11 = p11 + h / 6.0 * (q11 + 2.0 * s11 + 2.0 * u11 + z11)
+        p12 = p12 + h / 6.0 * (q12 + 2.0 * s12 + 2.0 * u12 + z12)
+        p21 = p21 + h / 6.0 * (q21 + 2.0 * s21 + 2.0 * u21 + z21)
+        p22 = p22 + h / 6.0 * (q22 + 2.0 * s22 + 2.0 * u22 + z22)
+    return x, v, p11, p12, p21, p22
+
+
+@njit(cache=True)
+def _lyapunov_form(a, b, c, d):  # pragma: no cover - compiled
+    """``P`` (symmetric, ``(p11, p12, p22)``) of ``P - M^T P M = I`` for ``M = [[a, b], [c, d]]``.
+
+    Returns NaNs when the 3 x 3 system is singular (a multiplier on the unit circle).
+    """
+    # rows: (1,1), (1,2), (2,2) of P - M^T P M = I in the unknowns p11, p12, p22
+    m00 = 1.0 - a * a
+    m01 = -2.0 * a * c
+    m02 = -c * c
+    m10 = -a * b
+    m11 = 1.0 - (a * d + b * c)
+    m12 = -c * d
+    m20 = -b * b
+    m21 = -2.0 * b * d
+    m22 = 1.0 - d * d
+    det = (m00 * (m11 * m22 - m12 * m21) - m01 * (m10 * m22 - m12 * m20)
+           + m02 * (m10 * m21 - m11 * m20))
+    if det == 0.0 or not math.isfinite(det):
+        return math.nan, math.nan, math.nan
+    # right-hand side (1, 0, 1), Cramer's rule
+    p11 = (1.0 * (m11 * m22 - m12 * m21) - m01 * (0.0 * m22 - m12 * 1.0)
+           + m02 * (0.0 * m21 - m11 * 1.0)) / det
+    p12 = (m00 * (0.0 * m22 - m12 * 1.0) - 1.0 * (m10 * m22 - m12 * m20)
+           + m02 * (m10 * 1.0 - 0.0 * m20)) / det
+    p22 = (m00 * (m11 * 1.0 - 0.0 * m21) - m01 * (m10 * 1.0 - 0.0 * m20)
+           + 1.0 * (m10 * m21 - m11 * m20)) / det
+    return p11, p12, p22
+
+
+@njit(cache=True)
+def _record_one(x, v, zeta, force, b, kd, ed, kb, eb, cs, sn, h, amps):  # pragma: no cover
+    """One period recorded from ``(x, v)``: ``amps`` (DFT of harmonics 1-3), contact flags.
+
+    Returns ``(x, v, loss, impact, x range, v range)`` at the period's end; the flags as
+    :func:`_steady`'s (cubic Hermite check of every step, offsets ``ed``, ``eb`` of the single
+    column); the ranges (max - min over the step ends) size the continuation guard.
+    """
+    n = kd.shape[0] // 2
+    n2 = 2 * n
+    c1 = 0.0
+    c2 = 0.0
+    c3 = 0.0
+    s1 = 0.0
+    s2 = 0.0
+    s3 = 0.0
+    loss = False
+    impact = False
+    xlo = x
+    xhi = x
+    vlo = v
+    vhi = v
+    for j in range(n):
+        c1 += x * cs[0, j]
+        c2 += x * cs[1, j]
+        c3 += x * cs[2, j]
+        s1 += x * sn[0, j]
+        s2 += x * sn[1, j]
+        s3 += x * sn[2, j]
+        xn, vn = _step(x, v, j, zeta, force, b, kd, ed, kb, eb, h)
+        j0 = 2 * j
+        j2 = (j0 + 2) % n2
+        if not loss:
+            if _min_below(x, v, xn, vn, h, ed[j0, 0], ed[j0 + 1, 0], ed[j2, 0]) < b:
+                loss = True
+        if not impact:
+            if _min_below(x, v, xn, vn, h, eb[j0, 0], eb[j0 + 1, 0], eb[j2, 0]) < -b:
+                impact = True
+        x, v = xn, vn
+        xlo = min(xlo, x)
+        xhi = max(xhi, x)
+        vlo = min(vlo, v)
+        vhi = max(vhi, v)
+    amps[0] = 2.0 * math.sqrt(c1 * c1 + s1 * s1) / n
+    amps[1] = 2.0 * math.sqrt(c2 * c2 + s2 * s2) / n
+    amps[2] = 2.0 * math.sqrt(c3 * c3 + s3 * s3) / n
+    return x, v, loss, impact, xhi - xlo, vhi - vlo
+
+
+@njit(cache=True)
+def _orbit_range(x, v, zeta, force, b, kd, ed, kb, eb, h):  # pragma: no cover - compiled
+    """One plain period from ``(x, v)``: ``(x, v, x range, v range)`` (max - min, step ends)."""
+    n = kd.shape[0] // 2
+    xlo = x
+    xhi = x
+    vlo = v
+    vhi = v
+    for j in range(n):
+        x, v = _step(x, v, j, zeta, force, b, kd, ed, kb, eb, h)
+        xlo = min(xlo, x)
+        xhi = max(xhi, x)
+        vlo = min(vlo, v)
+        vhi = max(vhi, v)
+    return x, v, xhi - xlo, vhi - vlo
+
+
+@njit(cache=True)
+def _lyapunov_value(p11, p12, p22, dx, dv):  # pragma: no cover - compiled
+    return p11 * dx * dx + 2.0 * p12 * dx * dv + p22 * dv * dv
+
+
+@njit(cache=True)
+def _shoot(
+    x, v, zeta, force, b, kd, ed, kb, eb, h, tol, max_newton, guard_x, guard_v, basin_periods,
+    basin_repeats,
+):  # pragma: no cover - compiled
+    """Newton on the period-1 Poincare map from the entry state ``y0 = (x, v)``.
+
+    Accepts the fixed point ``y*`` when (1) ``|P(y) - y| < tol`` (max norm), (2) both Floquet
+    multipliers lie inside the unit circle (Jury test on the monodromy matrix ``M``), (3) the
+    *continuation guard*: ``|x* - x0| <= guard_x`` and ``|v* - v0| <= guard_v`` (the orbit
+    continues the branch the entry state is on), and (4) the *basin check* in the orbit's
+    quadratic Lyapunov function ``V(d) = d^T P d`` (``P - M^T P M = I``) of ``d = y - y*``: a
+    period from ``y_k`` decreases it by at least half of what the linearised map gives,
+    ``V(d_(k+1)) <= V(d_k) - |d_k|^2 / 2``, either at once from the entry state (``k = 0``) or
+    for ``basin_repeats`` consecutive periods of the physical transient followed for at most
+    ``basin_periods`` plain periods. Entry states within ``10 tol`` of ``y*`` pass (4) at once.
+
+    Returns ``(ok, x, v, periods)``: ``(x, v)`` is ``y*`` when accepted, else the state the
+    settling fallback continues from (the entry state, or the transient's state after the
+    periods followed); periods counted as plain-period equivalents (a variational period as 2).
+    """
+    n = kd.shape[0] // 2
+    xs = x
+    vs = v
+    cost = 0
+    x1 = math.nan
+    v1 = math.nan
+    for it in range(max_newton):
+        xp, vp, m11, m12, m21, m22 = _period_monodromy(xs, vs, zeta, force, b, kd, ed, kb, eb, h)
+        cost += 2
+        if it == 0:
+            x1 = xp
+            v1 = vp
+        r0 = xp - xs
+        r1 = vp - vs
+        scale = max(1.0, abs(xs), abs(vs))
+        if max(abs(r0), abs(r1)) < tol * scale:
+            det = m11 * m22 - m12 * m21
+            tr = m11 + m22
+            if not (abs(det) < 1.0 and abs(tr) < 1.0 + det):
+                return False, x, v, cost
+            d0x = x - xs
+            d0v = v - vs
+            if not (abs(d0x) <= guard_x and abs(d0v) <= guard_v):
+                return False, x, v, cost
+            if max(abs(d0x), abs(d0v)) <= 10.0 * tol * scale:
+                return True, xs, vs, cost
+            p11, p12, p22 = _lyapunov_form(m11, m12, m21, m22)
+            if not math.isfinite(p11):
+                return False, x, v, cost
+            q0 = _lyapunov_value(p11, p12, p22, d0x, d0v)
+            q1 = _lyapunov_value(p11, p12, p22, x1 - xs, v1 - vs)
+            if q1 <= q0 - _BASIN_DECREASE * (d0x * d0x + d0v * d0v):
+                return True, xs, vs, cost
+            # follow the physical transient from P(y0), one plain period at a time
+            xa = x1
+            va = v1
+            good = 0
+            for _ in range(basin_periods):
+                dx = xa - xs
+                dv = va - vs
+                qa = _lyapunov_value(p11, p12, p22, dx, dv)
+                for j in range(n):
+                    xa, va = _step(xa, va, j, zeta, force, b, kd, ed, kb, eb, h)
+                cost += 1
+                if not (math.isfinite(xa) and math.isfinite(va)):
+                    return False, x, v, cost
+                qb = _lyapunov_value(p11, p12, p22, xa - xs, va - vs)
+                if qb <= qa - _BASIN_DECREASE * (dx * dx + dv * dv):
+                    good += 1
+                    if good >= basin_repeats:
+                        return True, xs, vs, cost
+                else:
+                    good = 0
+            return False, xa, va, cost
+        a11 = m11 - 1.0
+        a22 = m22 - 1.0
+        d = a11 * a22 - m12 * m21
+        if d == 0.0 or not math.isfinite(d):
+            break
+        xs += (-r0 * a22 + m12 * r1) / d
+        vs += (-a11 * r1 + m21 * r0) / d
+        if not (math.isfinite(xs) and math.isfinite(vs)):
+            break
+    return False, x, v, cost
+
+
+@njit(cache=True)
+def _walker_path(
+    x, v, zeta, force, b, kd, ed, kb, eb, npair, cs, sn, lam, tol, shoot, max_newton,
+    min_periods, max_periods, guard, guard_floor, basin_periods, basin_repeats, ring, poinc,
+    amps, loss, impact, converged, newton, periods_run,
+):  # pragma: no cover - compiled
+    """One walker's sweep along ``lam`` (time order), carrying the state; fills its rows.
+
+    With ``shoot``, Newton is tried only where the entry state lies on a period-1 orbit of the
+    previous point (Newton-accepted, or settled with period 1), whose ranges size the
+    continuation guard (``guard`` times the range plus ``guard_floor``); the first point and
+    the point after a period-n, aperiodic or unsettled response are settled.
+    """
+    n = kd.shape[0] // 2
+    rx = -1.0  # orbit ranges of the previous point; < 0: no period-1 predictor
+    rv = -1.0
+    for i in range(lam.size):
+        h = 2.0 * math.pi / (lam[i] * n)
+        ok = False
+        cost = 0
+        xs = x
+        vs = v
+        if shoot and rx >= 0.0:
+            ok, xs, vs, cost = _shoot(
+                x, v, zeta, force, b, kd, ed, kb, eb, h, tol, max_newton,
+                guard * rx + guard_floor, guard * rv + guard_floor, basin_periods,
+                basin_repeats,
+            )
+        if ok:
+            x, v, lo, im, rx, rv = _record_one(
+                xs, vs, zeta, force, b, kd, ed, kb, eb, cs, sn, h, amps[i]
+            )
+            loss[i] = lo
+            impact[i] = im
+            converged[i] = True
+            newton[i] = True
+            periods_run[i] = cost + 1
+        else:
+            x, v, cnt, per, _mu, lo, im, _pa = _steady(
+                xs, vs, zeta, force, b, kd, ed, kb, eb, ed[:, 0], eb[:, 0], npair, cs, sn, h,
+                tol, min_periods, max_periods, 1, ring, poinc, amps[i],
+            )
+            loss[i] = lo
+            impact[i] = im
+            converged[i] = per > 0
+            newton[i] = False
+            periods_run[i] = cost + cnt + (per if per > 0 else 1)
+            rx = -1.0
+            rv = -1.0
+            if shoot and per == 1:
+                x, v, rx, rv = _orbit_range(x, v, zeta, force, b, kd, ed, kb, eb, h)
+                periods_run[i] += 1
+    return x, v
+
+
+@njit(parallel=True, cache=True)
+def walker_sweep_kernel(
+    log_nodes, kbank, ebank, bbank, log_s, eps, zeta, force, b, lam, cs, sn, tol, shoot,
+    max_newton, min_periods, max_periods, guard, guard_floor, basin_periods, basin_repeats, amps,
+    loss, impact, converged, newton, periods_run,
+):  # pragma: no cover - compiled
+    """Every walker's sweep in one call, ``numba.prange`` over walkers.
+
+    Per walker ``w``: tables interpolated from the bank at ``log_s[w]`` with the alternating
+    parts scaled by ``eps[w]`` (:func:`_walker_tables`), start at the static state
+    ``x = b + F + mean(e)``, ``x' = 0``, then the points of ``lam[w]`` (``(W, M)``, time order)
+    each by Newton shooting (``shoot``) with the settling fallback, or by settling alone.
+    Outputs ``(W, M[, 3])``.
+    """
+    n2 = kbank.shape[1]
+    for w in prange(lam.shape[0]):
+        kd = np.empty((n2, 1))
+        ed = np.empty((n2, 1))
+        kb = np.empty((n2, 1))
+        eb = np.empty((n2, 1))
+        em = _walker_tables(log_nodes, kbank, ebank, bbank, log_s[w], eps[w], kd, ed, kb, eb)
+        npair = np.ones(n2, dtype=np.int64)
+        ring = np.empty((SETTLE_RING, 2))
+        poinc = np.empty((1, 2))
+        _walker_path(
+            b[w] + force[w] + em, 0.0, zeta[w], force[w], b[w], kd, ed, kb, eb, npair, cs, sn,
+            lam[w], tol, shoot, max_newton, min_periods, max_periods, guard, guard_floor,
+            basin_periods, basin_repeats, ring, poinc, amps[w], loss[w], impact[w], converged[w],
+            newton[w], periods_run[w],
         )

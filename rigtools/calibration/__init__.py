@@ -13,6 +13,12 @@ checks, identifiability), ``comparison`` (PSIS-LOO of the variants), ``result``,
 figures), ``plan`` (which runs to add), ``campaign_inputs`` (:func:`calibrate` of a campaign:
 its pair, ``[calibration]`` and ``[thermal]`` blocks and observations), ``autocorr``
 (integrated autocorrelation time), ``errors``.
+
+The SDOF run-up calibration (issue 20: FVMS, VVMS and LSTE against the measured Arms run-up
+curves): ``runup_data`` (arms rows -> time-ordered curves), ``runup_forward`` (parameters ->
+modelled Arms along each path), ``runup_likelihood`` (log-normal, gains marginalised),
+``runup_model`` (the vectorised log posterior), ``runup_api`` (:func:`calibrate_runups`),
+``runup_outputs`` (:class:`RunUpResult` and its files).
 """
 
 from rigtools.calibration.api import CHECKPOINT_FILE, calibrate_observations, resolve_reference
@@ -25,9 +31,12 @@ from rigtools.calibration.campaign_inputs import (
 from rigtools.calibration.comparison import ModelComparison, compare_variants
 from rigtools.calibration.config import (
     PARAMETERS,
+    RUNUP_MODELS,
+    RUNUP_PARAMETERS,
     VARIANTS,
     CalibrationConfig,
     ParameterSpec,
+    RunUpSettings,
     Tolerances,
     default_config,
     parse_calibration_block,
@@ -38,11 +47,20 @@ from rigtools.calibration.outputs import write_outputs
 from rigtools.calibration.plan import RunPlan, plan_next_runs
 from rigtools.calibration.priors import Prior, prior_from_mapping
 from rigtools.calibration.result import CalibrationResult, VariantFit
+from rigtools.calibration.runup_api import calibrate_runup_data, calibrate_runups
+from rigtools.calibration.runup_outputs import (
+    RunPredictive,
+    RunUpFit,
+    RunUpResult,
+    write_runup_outputs,
+)
 from rigtools.calibration.simulate import simulate_observations
 
 __all__ = [
     "CHECKPOINT_FILE",
     "PARAMETERS",
+    "RUNUP_MODELS",
+    "RUNUP_PARAMETERS",
     "VARIANTS",
     "CalibrationConfig",
     "CalibrationError",
@@ -52,10 +70,16 @@ __all__ = [
     "PredictiveCurves",
     "Prior",
     "RunPlan",
+    "RunPredictive",
+    "RunUpFit",
+    "RunUpResult",
+    "RunUpSettings",
     "Tolerances",
     "VariantFit",
     "calibrate",
     "calibrate_observations",
+    "calibrate_runup_data",
+    "calibrate_runups",
     "campaign_config",
     "campaign_observations",
     "campaign_reference",
@@ -68,4 +92,5 @@ __all__ = [
     "resolve_reference",
     "simulate_observations",
     "write_outputs",
+    "write_runup_outputs",
 ]

@@ -8,11 +8,17 @@ the path of one (``rigtools observe``'s parquet), the
 :class:`~rigtools.campaign.observation_table.Observations` of ``observe_campaign``, or None (the
 campaign is observed first). The sampling itself is
 :func:`rigtools.calibration.api.calibrate_observations`.
+
+The natural-frequency calibration is of one gear pair, the campaign's: runs whose
+``[[run]] gear_set`` names another gear set (:meth:`~rigtools.campaign.Campaign.gear_for`) are
+left out of it (:func:`campaign_gear_rows`), each with a warning naming the run and its gear
+set; the SDOF run-up calibration uses them, each on its own pair.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import TypeAlias
 
@@ -26,8 +32,8 @@ from rigtools.campaign.manifest import Campaign, load_campaign
 from rigtools.campaign.observation_table import Observations
 from rigtools.campaign.thermal_state import thermal_reference
 
-__all__ = ["ObservationsInput", "calibrate", "campaign_config", "campaign_observations",
-           "campaign_reference"]
+__all__ = ["ObservationsInput", "calibrate", "campaign_config", "campaign_gear_rows",
+           "campaign_observations", "campaign_reference"]
 
 #: What ``observations`` may be.
 ObservationsInput: TypeAlias = pd.DataFrame | Observations | str | Path | None
@@ -46,6 +52,37 @@ def campaign_reference(campaign: Campaign) -> ThermalReference | None:
     if th.housing == "follows-oil":
         return thermal_reference(campaign, oil_temperature_C=th.reference_temperature_C)
     return thermal_reference(campaign)
+
+
+def campaign_gear_rows(campaign: Campaign, observations: pd.DataFrame
+                       ) -> tuple[pd.DataFrame, dict[str, str]]:
+    """The rows of the runs on the campaign's gear set, and why the others are left out.
+
+    Parameters
+    ----------
+    campaign : Campaign
+    observations : pandas.DataFrame
+        The observations table.
+
+    Returns
+    -------
+    table : pandas.DataFrame
+        ``observations`` without the rows of runs whose ``[[run]] gear_set`` is another gear
+        set than ``[campaign] gear_set`` (the same object when no row is dropped). Rows of run
+        ids the campaign does not list are kept.
+    left_out : dict
+        Run id -> why it is left out (naming its gear set), in campaign order.
+    """
+    left_out = {r.id: (f"on gear set {r.gear_set!r} ([[run]] gear_set), not the campaign's "
+                       f"{campaign.gear_set!r}: left out of the natural-frequency calibration "
+                       "(the SDOF run-up calibration uses it)")
+                for r in campaign.runs if not campaign.on_campaign_gear(r.id)}
+    present = set(observations["run_id"].astype(str)) if left_out else set()
+    left_out = {k: v for k, v in left_out.items() if k in present}
+    if not left_out:
+        return observations, {}
+    keep = ~observations["run_id"].astype(str).isin(list(left_out))
+    return observations.loc[keep].reset_index(drop=True), left_out
 
 
 def campaign_config(campaign: Campaign) -> CalibrationConfig:
@@ -119,10 +156,21 @@ def calibrate(
         The manifest or its ``[calibration]`` / ``[thermal]`` block is wrong (file and line).
     CalibrationError
         No usable run, priors that exclude the data, every run jammed (run or key named).
+
+    Notes
+    -----
+    Runs on another gear set than the campaign's are left out (:func:`campaign_gear_rows`);
+    each is named in the result's ``warnings`` (and the summary's).
     """
     camp = campaign if isinstance(campaign, Campaign) else load_campaign(campaign)
     cfg = campaign_config(camp) if config is None else config
-    table = campaign_observations(camp, observations, outdir=outdir)
-    return calibrate_observations(table, camp.gear.pair, cfg,
-                                  thermal_reference=campaign_reference(camp), outdir=outdir,
-                                  progress=progress, seed=seed)
+    table, left_out = campaign_gear_rows(camp, campaign_observations(camp, observations,
+                                                                     outdir=outdir))
+    result = calibrate_observations(table, camp.gear.pair, cfg,
+                                    thermal_reference=campaign_reference(camp), outdir=outdir,
+                                    progress=progress, seed=seed)
+    if not left_out:
+        return result
+    notes = [f"run {r!r} left out: {why}" for r, why in left_out.items()]
+    summary = {**result.summary, "warnings": [*notes, *result.summary.get("warnings", [])]}
+    return replace(result, warnings=(*notes, *result.warnings), summary=summary)

@@ -1,5 +1,8 @@
 r"""Which reading of the model the data support: PSIS-LOO over the model variants.
 
+(The same comparison ranks the SDOF models of the run-up calibration, issue 20: there an
+observation is one point of one channel's Arms curve, the variable ``arms``.)
+
 Each variant (``secant_path``, ``secant_mesh``, ``tangent``) is fitted with the same priors,
 stiffness scale and error terms; its pointwise log-likelihood is the per-run mixture
 likelihood (a run, with all its candidate peaks, is one observation). Pareto-smoothed
@@ -78,14 +81,25 @@ def _f(x: Any) -> float | None:
     return v if math.isfinite(v) else None
 
 
+def _log_likelihood_variable(idata: az.InferenceData) -> Any:
+    """The one variable of the ``log_likelihood`` group."""
+    group = idata["log_likelihood"]
+    names = list(group.data_vars)
+    if len(names) != 1:
+        raise ValueError(f"the log_likelihood group must hold one variable, held {names}")
+    return group[names[0]]
+
+
 def compare_variants(idata: Mapping[str, az.InferenceData]) -> ModelComparison:
     """Compare variants by PSIS-LOO (module notes).
 
     Parameters
     ----------
     idata : mapping
-        Variant name -> InferenceData with a ``log_likelihood`` group (one variable, dims
-        ``chain, draw, run``).
+        Variant name -> InferenceData with a ``log_likelihood`` group holding one variable
+        (dims ``chain, draw`` and one observation dimension): ``f_n`` over ``run`` for the
+        natural-frequency variants, ``arms`` over ``obs`` for the run-up models
+        (:mod:`rigtools.calibration.runup_api`); every variant must use the same name.
 
     Returns
     -------
@@ -99,7 +113,7 @@ def compare_variants(idata: Mapping[str, az.InferenceData]) -> ModelComparison:
     variants: dict[str, dict[str, Any]] = {}
     for name, loo in loos.items():
         k = np.asarray(loo.pareto_k, dtype=float)
-        ll = np.asarray(idata[name]["log_likelihood"]["f_n"])
+        ll = np.asarray(_log_likelihood_variable(idata[name]))
         constant = np.ptp(ll.reshape(-1, ll.shape[-1]), axis=0) < 1e-9
         k = np.where(constant, -np.inf, k)     # equal weights: PSIS is exact there
         row: dict[str, Any] = {

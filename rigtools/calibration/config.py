@@ -41,6 +41,60 @@ Every key is optional; with no block at all the defaults below apply. A complete
     acceptance_range = [0.15, 0.75]
     min_narrowing = 2.0               # posterior sd at most prior sd / this, else a warning
 
+The SDOF run-up calibration (issue 20; :mod:`rigtools.calibration.runup_api`) is enabled by
+naming its models, and configured in a sub-table (every key optional; the values below are
+the defaults)::
+
+    [calibration]
+    models = ["fvms", "vvms", "lste"]     # default []: no run-up calibration
+
+    [calibration.runup]
+    max_speed_points = 100        # per direction (up, down), after binning a ramp
+    min_speed_points = 20         # usable points per run below which the run is refused
+    min_span = 1.3                # max/min mesh frequency a run-up must span
+    steps_per_period = 64         # RK4 steps per mesh period of the model sweeps
+    walkers = 32                  # default: [calibration] walkers
+    max_steps = 20000             # default: [calibration] max_steps
+
+    [calibration.runup.priors]    # the same prior tables as [calibration.priors]
+    zeta = {dist = "lognormal", median = 0.03, sigma = 0.7}
+    mesh_stiffness_scale = {dist = "lognormal", median = 1.0, sigma = 0.3}
+    fluctuation_scale = {dist = "lognormal", median = 1.0, sigma = 0.3}  # sampled only if given
+    backlash = {dist = "uniform", lower = 0.0, upper = 300.0}   # um, total 2b
+    gain = {dist = "lognormal", median = 0.01, sigma = 3.0}     # must be lognormal
+    model_error = {dist = "halfnormal", sd = 0.3}
+
+    [calibration.runup.fixed]
+    fluctuation_scale = 1.0       # the default; give it a prior (and no fixed value) to sample it
+
+Run-up parameters (``[calibration.runup.priors]`` / ``.fixed``; the ``[calibration]``
+tolerances, ``check_every``, ``seed`` and the equivalent-mass keys apply to it too):
+
+``zeta`` (1)
+    Damping ratio of the mesh relative to ``k_ref = s kbar_F0``: ``c = 2 zeta sqrt(k_ref m_e)``.
+    Default lognormal(median 0.03, sigma 0.7): 95 % in [0.008, 0.12], the range of spur-gear
+    mesh damping ratios in the literature.
+``mesh_stiffness_scale`` (1)
+    ``s``: every tooth compliance is ``C / s`` (the model at ``s`` is the mesh cycle at
+    ``T / s`` with ``k_ref = s kbar_F0``, ``kbar_F0`` the mean error-free FVMS mesh stiffness
+    of the pair); sets the mesh natural frequency ``sqrt(s kbar_F0 / m_e) / 2 pi``.
+    Default lognormal(1, 0.3), cut to the cycle banks' range [0.3, 3].
+``fluctuation_scale`` (1)
+    Scale of the alternating part of the mesh stiffness (FVMS, VVMS) or of the loaded static
+    transmission error (LSTE). Fixed at 1 by default: in the linear range only its product
+    with the gains is identified.
+``backlash`` (um)
+    Total backlash ``2b`` on the line of action. Identified only through back-side impacts;
+    default uniform(0, 300).
+``gain`` (1)
+    Prior of every channel gain ``G_c`` (housing acceleration over ``(2 pi h f_m)^2`` times
+    the DTE harmonic), one per run and channel, marginalised in closed form: it must be an
+    untruncated lognormal and cannot be fixed. Default lognormal(median 0.01, sigma 3): wide
+    (95 % over five decades), so the data set the gains.
+``model_error`` (1)
+    Standard deviation of ``log Arms`` about the model: the relative model and measurement
+    error of the curves. Default halfnormal(sd 0.3).
+
 Parameters
 ----------
 ``backlash`` (um)
@@ -90,7 +144,9 @@ Defaults, and why a test engineer can trust them on an FZG-type campaign
 
 Errors name the key and its line (:class:`rigtools.errors.CampaignError`): an unknown key or
 parameter, a value of the wrong type, ``lower >= upper``, ``sd <= 0`` (or ``sigma``), a fixed
-value that its prior (or the parameter's domain) excludes.
+value that its prior (or the parameter's domain) excludes; for the run-up: an unknown model
+in ``models``, a ``gain`` prior that is not an untruncated lognormal or a fixed ``gain``,
+``min_speed_points > max_speed_points``, ``min_span <= 1``, an odd number of walkers.
 """
 
 from __future__ import annotations
@@ -109,6 +165,8 @@ __all__ = [
     "JAMMED_TREATMENTS",
     "LIKELIHOODS",
     "PARAMETERS",
+    "RUNUP_MODELS",
+    "RUNUP_PARAMETERS",
     "THERMAL_MODELS",
     "VARIANTS",
     "CalibrationConfig",
@@ -116,6 +174,8 @@ __all__ = [
     "LikelihoodKind",
     "ParameterInfo",
     "ParameterSpec",
+    "RunUpModel",
+    "RunUpSettings",
     "ThermalModel",
     "Tolerances",
     "Variant",
@@ -127,11 +187,14 @@ Variant = Literal["secant_path", "secant_mesh", "tangent"]
 ThermalModel = Literal["linear", "expansion"]
 JammedTreatment = Literal["censored", "double_flank"]
 LikelihoodKind = Literal["normal", "student_t"]
+RunUpModel = Literal["fvms", "vvms", "lste"]
 #: The model variants (issue 18 item 3), headline default first.
 VARIANTS: Final[tuple[Variant, ...]] = ("secant_path", "secant_mesh", "tangent")
 THERMAL_MODELS: Final[tuple[ThermalModel, ...]] = ("linear", "expansion")
 JAMMED_TREATMENTS: Final[tuple[JammedTreatment, ...]] = ("censored", "double_flank")
 LIKELIHOODS: Final[tuple[LikelihoodKind, ...]] = ("normal", "student_t")
+#: The SDOF mesh-stiffness models of the run-up calibration (issue 20).
+RUNUP_MODELS: Final[tuple[RunUpModel, ...]] = ("fvms", "vvms", "lste")
 
 
 @dataclass(frozen=True)
@@ -176,14 +239,45 @@ PARAMETERS: Final[dict[str, ParameterInfo]] = {
                          "seed 000's thermoelastic correction factor"),
 }
 
+#: The parameters of the run-up (SDOF Arms) calibration, in sampling order. ``gain`` is the
+#: prior of every channel gain ``G_c``; the gains are marginalised, never sampled, so it must
+#: be log-normal and cannot be fixed.
+RUNUP_PARAMETERS: Final[dict[str, ParameterInfo]] = {
+    "zeta": ParameterInfo(
+        "1", (0.0, math.inf), prior_from_mapping({"dist": "lognormal", "median": 0.03,
+                                                  "sigma": 0.7}),
+        "damping ratio of the mesh, relative to k_ref = s kbar_F0"),
+    "mesh_stiffness_scale": ParameterInfo(
+        "1", (0.0, math.inf), prior_from_mapping({"dist": "lognormal", "median": 1.0,
+                                                  "sigma": 0.3}),
+        "s: mesh compliance C/s (the model at s is the mesh cycle at T/s, k_ref = s kbar_F0)"),
+    "fluctuation_scale": ParameterInfo(
+        "1", (0.0, math.inf), 1.0,  # fixed by default: only G eps is identified when linear
+        "scale of the alternating part of the mesh stiffness (FVMS, VVMS) or of the loaded "
+        "static transmission error (LSTE)"),
+    "backlash": ParameterInfo(
+        "um", (0.0, math.inf), prior_from_mapping({"dist": "uniform", "lower": 0.0,
+                                                   "upper": 300.0}),
+        "total backlash 2b on the line of action"),
+    "model_error": ParameterInfo(
+        "1", (0.0, math.inf), prior_from_mapping({"dist": "halfnormal", "sd": 0.3}),
+        "sigma of log Arms: relative model error of the Arms curves"),
+    "gain": ParameterInfo(
+        "1", (0.0, math.inf), prior_from_mapping({"dist": "lognormal", "median": 0.01,
+                                                  "sigma": 3.0}),
+        "G_c: housing acceleration over (2 pi h f_m)^2 DTE, per channel (marginalised)"),
+}
+
 _TOP_KEYS: Final = (
     "model_variant", "compare_variants", "thermal_model", "jammed_model", "likelihood",
     "student_t_dof", "channels", "detection_probability", "structural_modes", "band_Hz",
     "equivalent_mass_kg", "inertia_kg_m2", "disc_radius", "reference_temperature_C",
     "operating_temperature_C", "temperature_sd_K", "walkers", "max_steps", "check_every",
     "seed", "map_starts", "plan_torque_range_Nm", "plan_temperature_range_C", "priors", "fixed",
-    "tolerances",
+    "tolerances", "models", "runup",
 )
+_RUNUP_KEYS: Final = ("max_speed_points", "min_speed_points", "min_span", "steps_per_period",
+                       "walkers", "max_steps", "priors", "fixed")
 _TOLERANCE_KEYS: Final = ("unchanged_band_um", "regime_probability", "max_r_hat",
                           "min_ess_bulk", "acceptance_range", "min_narrowing")
 
@@ -247,6 +341,65 @@ class Tolerances:
 
 
 @dataclass(frozen=True)
+class RunUpSettings:
+    """The ``[calibration.runup]`` table: data preparation and sampler of the run-up fit.
+
+    Attributes
+    ----------
+    max_speed_points : int
+        Points per direction (up, down) after binning a ramp (median per equal-log-f bin).
+    min_speed_points : int
+        Usable points per run below which the run is refused.
+    min_span : float
+        Smallest ratio max/min of the mesh frequency a run-up must span.
+    steps_per_period : int
+        Integration steps per mesh period of the model sweeps.
+    walkers : int or None
+        Walkers of the ensemble sampler; None: the ``[calibration]`` setting.
+    max_steps : int or None
+        Largest number of sampler steps; None: the ``[calibration]`` setting.
+    parameters : tuple of ParameterSpec
+        In :data:`RUNUP_PARAMETERS` order (``gain`` always has its log-normal prior).
+    """
+
+    max_speed_points: int = 100
+    min_speed_points: int = 20
+    min_span: float = 1.3
+    steps_per_period: int = 64
+    walkers: int | None = None
+    max_steps: int | None = None
+    parameters: tuple[ParameterSpec, ...] = field(
+        default_factory=lambda: _default_runup_parameters())
+
+    def parameter(self, name: str) -> ParameterSpec:
+        """The spec of run-up parameter ``name``."""
+        for p in self.parameters:
+            if p.name == name:
+                return p
+        raise KeyError(name)
+
+    @property
+    def free_parameters(self) -> tuple[str, ...]:
+        """Names of the sampled run-up parameters (``gain`` excluded: marginalised)."""
+        return tuple(p.name for p in self.parameters if p.free and p.name != "gain")
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form in the keys of the TOML table (unset keys left out)."""
+        d: dict[str, Any] = {
+            "max_speed_points": self.max_speed_points,
+            "min_speed_points": self.min_speed_points,
+            "min_span": self.min_span,
+            "steps_per_period": self.steps_per_period,
+            "walkers": self.walkers,
+            "max_steps": self.max_steps,
+            "priors": {p.name: p.prior.to_dict() for p in self.parameters
+                       if p.prior is not None and p.free},
+            "fixed": {p.name: p.fixed for p in self.parameters if not p.free},
+        }
+        return {k: v for k, v in d.items() if v is not None}
+
+
+@dataclass(frozen=True)
 class CalibrationConfig:
     """The resolved ``[calibration]`` block (module docstring for every key and default).
 
@@ -286,6 +439,11 @@ class CalibrationConfig:
     parameters : tuple of ParameterSpec
         In :data:`PARAMETERS` order.
     tolerances : Tolerances
+    models : tuple of {"fvms", "vvms", "lste"}
+        SDOF models calibrated against the Arms run-up curves (empty: no run-up
+        calibration).
+    runup : RunUpSettings
+        The ``[calibration.runup]`` table.
     """
 
     model_variant: Variant = "secant_path"
@@ -313,6 +471,8 @@ class CalibrationConfig:
     plan_temperature_range_C: tuple[float, float] | None = None
     parameters: tuple[ParameterSpec, ...] = field(default_factory=lambda: _default_parameters())
     tolerances: Tolerances = field(default_factory=Tolerances)
+    models: tuple[RunUpModel, ...] = ()
+    runup: RunUpSettings = field(default_factory=RunUpSettings)
 
     def parameter(self, name: str) -> ParameterSpec:
         """The spec of parameter ``name``."""
@@ -370,6 +530,8 @@ class CalibrationConfig:
                            "max_r_hat": t.max_r_hat, "min_ess_bulk": t.min_ess_bulk,
                            "acceptance_range": list(t.acceptance_range),
                            "min_narrowing": t.min_narrowing},
+            "models": list(self.models),
+            "runup": self.runup.to_dict(),
         }
         return {k: v for k, v in d.items() if (v is not None and v != [])
                 or k == "compare_variants"}
@@ -378,6 +540,16 @@ class CalibrationConfig:
 def _default_parameters() -> tuple[ParameterSpec, ...]:
     out = []
     for name, info in PARAMETERS.items():
+        if isinstance(info.default, Prior):
+            out.append(ParameterSpec(name, info.unit, info.default, None))
+        else:
+            out.append(ParameterSpec(name, info.unit, None, float(info.default)))
+    return tuple(out)
+
+
+def _default_runup_parameters() -> tuple[ParameterSpec, ...]:
+    out = []
+    for name, info in RUNUP_PARAMETERS.items():
         if isinstance(info.default, Prior):
             out.append(ParameterSpec(name, info.unit, info.default, None))
         else:
@@ -460,8 +632,9 @@ class _Parser:
         return tuple(value)
 
     # -- priors ---------------------------------------------------------------------------
-    def prior(self, name: str, spec: Any) -> Prior:
-        key = f"calibration.priors.{name}"
+    def prior(self, name: str, spec: Any, *, where: str = "calibration.priors",
+              table: Mapping[str, ParameterInfo] = PARAMETERS) -> Prior:
+        key = f"{where}.{name}"
         spec = self.table(key, spec)
         if "dist" not in spec:
             raise self.error(key, f"key 'dist' ({', '.join(DISTRIBUTIONS)}) in {key}", "none")
@@ -481,13 +654,13 @@ class _Parser:
         if "lower" in values and "upper" in values and not values["lower"] < values["upper"]:
             raise self.error(f"{key}.lower", f"lower < upper in {key}",
                              f"lower = {values['lower']:g}, upper = {values['upper']:g}")
-        lo_dom, hi_dom = PARAMETERS[name].domain
+        lo_dom, hi_dom = table[name].domain
         natural_lo = {"lognormal": 0.0, "halfnormal": 0.0}.get(dist, -math.inf)
         lo = max(values.get("lower", natural_lo), lo_dom, natural_lo)
         hi = min(values.get("upper", math.inf), hi_dom)
         if not lo < hi:
             raise self.error(key, f"a prior for {name} that admits values in its domain "
-                             f"[{lo_dom:g}, {hi_dom:g}] {PARAMETERS[name].unit}",
+                             f"[{lo_dom:g}, {hi_dom:g}] {table[name].unit}",
                              f"support [{values.get('lower', natural_lo):g}, "
                              f"{values.get('upper', math.inf):g}]")
         if "lower" in values and dist == "lognormal" and values["lower"] < 0:
@@ -638,6 +811,13 @@ def parse_calibration_block(
         kw["plan_temperature_range_C"] = (lo, hi)
     if "tolerances" in block:
         kw["tolerances"] = _tolerances(p, p.table(key("tolerances"), block["tolerances"]))
+    if "models" in block:
+        names = p.strings(key("models"), block["models"])
+        for n in names:
+            p.choice(key("models"), n, RUNUP_MODELS)
+        kw["models"] = names
+    if "runup" in block:
+        kw["runup"] = _runup(p, p.table(key("runup"), block["runup"]))
     kw["parameters"] = _parameters(p, block.get("priors"), block.get("fixed"))
     cfg = CalibrationConfig(**kw)
     if cfg.compare_variants and cfg.model_variant not in cfg.compare_variants:
@@ -703,6 +883,81 @@ def _parameters(p: _Parser, priors: Any, fixed: Any) -> tuple[ParameterSpec, ...
             if prior is not None and not prior.contains(v):
                 raise p.error(key, f"a fixed {name} that its prior {prior.describe()} "
                               f"(calibration.priors.{name}) admits", f"{v:g}")
+            out.append(ParameterSpec(name, info.unit, prior, v))
+        elif prior is not None:
+            out.append(ParameterSpec(name, info.unit, prior, None))
+        elif isinstance(info.default, Prior):
+            out.append(ParameterSpec(name, info.unit, info.default, None))
+        else:
+            out.append(ParameterSpec(name, info.unit, None, float(info.default)))
+    return tuple(out)
+
+
+def _runup(p: _Parser, t: Mapping[str, Any]) -> RunUpSettings:
+    for k in t:
+        if k not in _RUNUP_KEYS:
+            raise p.unknown(f"calibration.runup.{k}", k, _RUNUP_KEYS,
+                            "a key of [calibration.runup]")
+    kw: dict[str, Any] = {}
+
+    def key(k: str) -> str:
+        return f"calibration.runup.{k}"
+
+    if "max_speed_points" in t:
+        kw["max_speed_points"] = p.integer(key("max_speed_points"), t["max_speed_points"],
+                                           minimum=3)
+    if "min_speed_points" in t:
+        kw["min_speed_points"] = p.integer(key("min_speed_points"), t["min_speed_points"],
+                                           minimum=3)
+    if "min_span" in t:
+        kw["min_span"] = p.number(key("min_span"), t["min_span"], minimum=1.0, exclusive=True)
+    if "steps_per_period" in t:
+        kw["steps_per_period"] = p.integer(key("steps_per_period"), t["steps_per_period"],
+                                           minimum=16)
+    if "walkers" in t:
+        w = p.integer(key("walkers"), t["walkers"], minimum=4)
+        if w % 2:
+            raise p.error(key("walkers"), "an even number of walkers", str(w))
+        kw["walkers"] = w
+    if "max_steps" in t:
+        kw["max_steps"] = p.integer(key("max_steps"), t["max_steps"], minimum=1)
+    if kw.get("min_speed_points", 20) > kw.get("max_speed_points", 100):
+        raise p.error(key("min_speed_points"), "min_speed_points <= max_speed_points",
+                      f"{kw.get('min_speed_points', 20)} > {kw.get('max_speed_points', 100)}")
+    kw["parameters"] = _runup_parameters(p, t.get("priors"), t.get("fixed"))
+    return RunUpSettings(**kw)
+
+
+def _runup_parameters(p: _Parser, priors: Any, fixed: Any) -> tuple[ParameterSpec, ...]:
+    pwhere, fwhere = "calibration.runup.priors", "calibration.runup.fixed"
+    priors = {} if priors is None else p.table(pwhere, priors)
+    fixed = {} if fixed is None else p.table(fwhere, fixed)
+    names = list(RUNUP_PARAMETERS)
+    for table, where in ((priors, pwhere), (fixed, fwhere)):
+        for n in table:
+            if n not in RUNUP_PARAMETERS:
+                raise p.unknown(f"{where}.{n}", n, names, f"a parameter name in [{where}]")
+    if "gain" in fixed:
+        raise p.error(f"{fwhere}.gain", "no fixed gain (the channel gains are marginalised "
+                      "with their log-normal prior)", repr(fixed["gain"]))
+    out = []
+    for name, info in RUNUP_PARAMETERS.items():
+        prior = (p.prior(name, priors[name], where=pwhere, table=RUNUP_PARAMETERS)
+                 if name in priors else None)
+        if name == "gain" and prior is not None and (
+                prior.dist != "lognormal" or math.isfinite(prior.upper) or prior.lower > 0):
+            raise p.error(f"{pwhere}.gain", "an untruncated lognormal prior for gain (it is "
+                          "marginalised in closed form)", prior.describe())
+        if name in fixed:
+            key = f"{fwhere}.{name}"
+            v = p.number(key, fixed[name])
+            lo, hi = info.domain
+            if not lo <= v <= hi:
+                raise p.error(key, f"a fixed {name} in its domain [{lo:g}, {hi:g}] "
+                              f"{info.unit}", f"{v:g}")
+            if prior is not None and not prior.contains(v):
+                raise p.error(key, f"a fixed {name} that its prior {prior.describe()} "
+                              f"({pwhere}.{name}) admits", f"{v:g}")
             out.append(ParameterSpec(name, info.unit, prior, v))
         elif prior is not None:
             out.append(ParameterSpec(name, info.unit, prior, None))

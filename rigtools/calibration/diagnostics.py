@@ -24,6 +24,7 @@ exist) are left out of the mean and sd, kept as +-inf in the quantiles, and coun
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from typing import Any, Final
 
 import arviz as az
@@ -33,7 +34,8 @@ from rigtools.calibration.config import Tolerances
 from rigtools.calibration.model import TEMPERATURE_OFFSET, CalibrationModel
 from rigtools.calibration.sampler import SamplerRun
 
-__all__ = ["DEGENERATE_CORRELATION", "STUCK_ACCEPTANCE", "check_fit", "summarize"]
+__all__ = ["DEGENERATE_CORRELATION", "STUCK_ACCEPTANCE", "check_fit", "sampler_warnings",
+           "summarize"]
 
 #: |corr(backlash, closure_coefficient)| above this is reported as a degeneracy.
 DEGENERATE_CORRELATION: Final = 0.95
@@ -85,6 +87,41 @@ def summarize(draws: np.ndarray, unit: str) -> dict[str, Any]:
     return out
 
 
+def sampler_warnings(names: Sequence[str], run: SamplerRun, summaries: Mapping[str, Any],
+                     tolerances: Tolerances) -> list[str]:
+    """R-hat, bulk ESS, acceptance and stuck walkers of a run, against ``tolerances``.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The sampled parameters.
+    run : SamplerRun
+    summaries : mapping
+        Name -> :func:`summarize` output, for ``names`` at least.
+    tolerances : Tolerances
+
+    Returns
+    -------
+    list of str
+        One warning per failed check; empty when everything passes.
+    """
+    w: list[str] = []
+    for n in names:
+        s = summaries[n]
+        if s["r_hat"] is not None and s["r_hat"] > tolerances.max_r_hat:
+            w.append(f"{n}: split-walker R-hat {s['r_hat']:.4f} above {tolerances.max_r_hat:g}")
+        if s["ess_bulk"] is not None and s["ess_bulk"] < tolerances.min_ess_bulk:
+            w.append(f"{n}: bulk ESS {s['ess_bulk']:.0f} below {tolerances.min_ess_bulk:g}")
+    acc = float(np.mean(run.acceptance_fraction))
+    lo, hi = tolerances.acceptance_range
+    if not lo <= acc <= hi:
+        w.append(f"mean acceptance fraction {acc:.3f} outside [{lo:g}, {hi:g}]")
+    stuck = int(np.sum(run.acceptance_fraction < STUCK_ACCEPTANCE))
+    if stuck:
+        w.append(f"{stuck} walker(s) accepted under {STUCK_ACCEPTANCE:g} of their proposals")
+    return w
+
+
 def check_fit(model: CalibrationModel, run: SamplerRun, summaries: dict[str, dict[str, Any]],
               tolerances: Tolerances) -> list[str]:
     """Warnings for a fitted variant (module notes); empty when everything passes.
@@ -102,19 +139,7 @@ def check_fit(model: CalibrationModel, run: SamplerRun, summaries: dict[str, dic
     list of str
     """
     w: list[str] = list(run.notes)   # not converged, bimodality, checkpoint events
-    for n in model.names:
-        s = summaries[n]
-        if s["r_hat"] is not None and s["r_hat"] > tolerances.max_r_hat:
-            w.append(f"{n}: split-walker R-hat {s['r_hat']:.4f} above {tolerances.max_r_hat:g}")
-        if s["ess_bulk"] is not None and s["ess_bulk"] < tolerances.min_ess_bulk:
-            w.append(f"{n}: bulk ESS {s['ess_bulk']:.0f} below {tolerances.min_ess_bulk:g}")
-    acc = float(np.mean(run.acceptance_fraction))
-    lo, hi = tolerances.acceptance_range
-    if not lo <= acc <= hi:
-        w.append(f"mean acceptance fraction {acc:.3f} outside [{lo:g}, {hi:g}]")
-    stuck = int(np.sum(run.acceptance_fraction < STUCK_ACCEPTANCE))
-    if stuck:
-        w.append(f"{stuck} walker(s) accepted under {STUCK_ACCEPTANCE:g} of their proposals")
+    w += sampler_warnings(model.names, run, summaries, tolerances)
     for n, prior in zip(model.names, model.priors, strict=True):
         if n.startswith(TEMPERATURE_OFFSET):   # nuisance: expected to follow its prior
             continue

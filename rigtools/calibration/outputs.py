@@ -42,6 +42,7 @@ from rigtools.calibration.result import CalibrationResult, VariantFit
 __all__ = [
     "CSV_COLUMNS",
     "inference_data",
+    "replace_atomically",
     "write_outputs",
     "write_summary_csv",
     "write_summary_json",
@@ -148,7 +149,7 @@ def _cell(v: Any) -> str:
     return str(v)
 
 
-def _replace_atomically(path: Path, text: str) -> None:
+def replace_atomically(path: Path, text: str) -> None:
     """Write ``text`` to a temporary file beside ``path``, fsync it, then rename it over."""
     tmp = path.with_name(f"{path.name}.tmp-{os.getpid()}")
     try:
@@ -170,12 +171,12 @@ def write_summary_csv(result: CalibrationResult, path: Path) -> None:
         for name, s in result.summary[kind].items():
             w.writerow([name, kind[:-1] if kind == "parameters" else kind, s["unit"],
                         *(_cell(s[c]) for c in CSV_COLUMNS[3:])])
-    _replace_atomically(path, buf.getvalue())
+    replace_atomically(path, buf.getvalue())
 
 
 def write_summary_json(result: CalibrationResult, path: Path) -> None:
     """``summary.json`` (module notes), written atomically."""
-    _replace_atomically(path, json.dumps(result.summary, indent=2, allow_nan=False) + "\n")
+    replace_atomically(path, json.dumps(result.summary, indent=2, allow_nan=False) + "\n")
 
 
 def write_outputs(result: CalibrationResult, outdir: str | Path) -> dict[str, Path]:

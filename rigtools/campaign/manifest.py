@@ -45,14 +45,22 @@ conditions as the engineer logged them::
     format = "mcap"
     accel = ["imu/accel_x", "imu/accel_y"]
 
+    [[run]]                                 # a run on another gear pair
+    id = "KB-ramp-300"
+    file = "runs/kb_ramp_300.mcap"
+    gear_set = "kahraman-blankenship"       # shipped name or path; default [campaign] gear_set
+
 Each ``[[run]]`` may override ``dbc``, ``map``, ``format`` and ``accel`` of ``[sensors]``
-(:meth:`Campaign.sensors_for` gives a run's effective sensors), so recordings of several loggers
-sit in one campaign. A ``file`` holding ``*``, ``?`` or ``[`` is a glob
-(:mod:`rigtools.campaign.run_files`): one run per matching file, with the id the ``[[run]]``
-gives with ``{stem}`` replaced by the file's stem (``<id>-<stem>`` when it holds none); a
-pattern that matches nothing is an error. ``[campaign] conditions`` names a CSV sheet
-(:mod:`rigtools.campaign.conditions_sheet`) whose values fill the conditions a ``[[run]]``
-does not give; a run and the sheet giving different values is an error naming both.
+(:meth:`Campaign.sensors_for` gives a run's effective sensors), so recordings of several
+loggers sit in one campaign. A ``[[run]] gear_set`` puts that run on another gear pair
+(:meth:`Campaign.gear_for` gives a run's gear set): the observations stage uses its teeth and
+pair for the run's mesh orders, and the natural-frequency calibration leaves such runs out
+(they calibrate the SDOF run-up models, each on its own pair). A ``file`` holding ``*``, ``?``
+or ``[`` is a glob (:mod:`rigtools.campaign.run_files`): one run per matching file, with the id
+the ``[[run]]`` gives with ``{stem}`` replaced by the file's stem (``<id>-<stem>`` when it
+holds none); a pattern that matches nothing is an error. ``[campaign] conditions`` names a CSV
+sheet (:mod:`rigtools.campaign.conditions_sheet`) whose values fill the conditions a
+``[[run]]`` does not give; a run and the sheet giving different values is an error naming both.
 
 The contract is ``data_schemas/campaign.schema.json``. :func:`load_campaign` validates the
 file once, at the boundary: a key or value the schema does not allow, a duplicate run id, a
@@ -242,6 +250,13 @@ class CampaignRun:
         :meth:`Campaign.sensors_for` applies them.
     pattern : str or None
         The glob the run's file was matched by (as written), None for a plain file.
+    gear_set : str or None
+        The run's own gear set as written (``[[run]] gear_set``: a shipped name or a path),
+        None when it runs on the campaign's.
+    gear_set_path : str or None
+        The gear-set file of ``gear_set``, None with it.
+    gear : models.geometry.GearSet or None
+        The loaded gear set of ``gear_set``, None with it (:meth:`Campaign.gear_for`).
     """
 
     id: str
@@ -259,6 +274,9 @@ class CampaignRun:
     accel: tuple[str, ...] = ()
     overrides: tuple[str, ...] = ()
     pattern: str | None = None
+    gear_set: str | None = None
+    gear_set_path: str | None = None
+    gear: GearSet | None = field(default=None, compare=False, repr=False)
 
     def conditions(self) -> dict[str, float | str | None]:
         """The four conditions by key."""
@@ -356,6 +374,35 @@ class Campaign:
             p = p[:-1]
         return None
 
+    def gear_for(self, run_id: str) -> GearSet:
+        """The gear set a run was run on: its ``[[run]] gear_set``, else the campaign's.
+
+        Parameters
+        ----------
+        run_id : str
+
+        Returns
+        -------
+        models.geometry.GearSet
+
+        Raises
+        ------
+        KeyError
+            No run of that id.
+        """
+        r = self.run(run_id)
+        return self.gear if r.gear is None else r.gear
+
+    def gear_set_for(self, run_id: str) -> str:
+        """The gear set of a run as written (its ``[[run]] gear_set``, else the campaign's)."""
+        r = self.run(run_id)
+        return self.gear_set if r.gear_set is None else r.gear_set
+
+    def on_campaign_gear(self, run_id: str) -> bool:
+        """Whether a run is on the campaign's gear set (no ``gear_set``, or the same file)."""
+        r = self.run(run_id)
+        return r.gear_set_path is None or Path(r.gear_set_path) == Path(self.gear_set_path)
+
     @property
     def pinion_teeth(self) -> int:
         """Teeth of the pinion (z1)."""
@@ -405,7 +452,9 @@ class Campaign:
             "report": None if self.report is None else dict(self.report),
             "run": [{"id": r.id, "file": str(r.file), "notes": r.notes, **r.conditions(),
                      "file_as_written": r.file_as_written, "pattern": r.pattern,
-                     "sensors": overrides(r)}
+                     "sensors": overrides(r),
+                     **({} if r.gear_set is None else {"gear_set": r.gear_set,
+                                                       "gear_set_path": r.gear_set_path})}
                     for r in self.runs],
         }
 
@@ -485,6 +534,7 @@ def load_campaign(path: str | Path) -> Campaign:
     camp = doc["campaign"]
     gear_set, gear_set_path, gear = _load_gear(p, base, camp["gear_set"], at("campaign",
                                                                              "gear_set"))
+    gears: dict[str, tuple[str, GearSet]] = {}  # run gear sets loaded, by value as written
     sens = doc.get("sensors", {})
     files: dict[str, Path | None] = {}
     for key in ("dbc", "map"):
@@ -532,6 +582,13 @@ def load_campaign(path: str | Path) -> Campaign:
     seen: dict[str, tuple[int, str | None]] = {}  # run id -> ([[run]] index, glob match)
     for i, r in enumerate(doc["run"]):
         sensors_of_run = _run_sensors(p, base, r, partial(at, "run", i))
+        if "gear_set" in r:
+            if r["gear_set"] not in gears:
+                _, path_i, gear_i = _load_gear(p, base, r["gear_set"], at("run", i, "gear_set"),
+                                               key="run.gear_set")
+                gears[r["gear_set"]] = (path_i, gear_i)
+            sensors_of_run.update(gear_set=r["gear_set"], gear_set_path=gears[r["gear_set"]][0],
+                                  gear=gears[r["gear_set"]][1])
         for file, run_id, pattern in _run_files(p, base, r, at("run", i, "file")):
             if run_id in seen:
                 j, first_file = seen[run_id]
@@ -670,14 +727,14 @@ def _condition(v: Any) -> float | str | None:
     return float(v)
 
 
-def _load_gear(p: Path, base: Path, value: str, where: str | None
-               ) -> tuple[str, str, GearSet]:
+def _load_gear(p: Path, base: Path, value: str, where: str | None,
+               key: str = "campaign.gear_set") -> tuple[str, str, GearSet]:
     looks_like_path = "/" in value or "\\" in value or value.endswith(".toml")
     try:
         if looks_like_path:
             f = _resolve(base, value)
             if not f.is_file():
-                raise CampaignError(p, where, "campaign.gear_set to be a shipped gear set ("
+                raise CampaignError(p, where, f"{key} to be a shipped gear set ("
                                     f"{', '.join(shipped_gear_sets())}) or a gear-set file",
                                     f"{value!r}: no such file ({f})")
         elif value in shipped_gear_sets():
@@ -685,9 +742,10 @@ def _load_gear(p: Path, base: Path, value: str, where: str | None
         else:
             f = _resolve(base, value)
             if not f.is_file():
-                raise CampaignError(p, where, "campaign.gear_set to be a shipped gear set ("
+                raise CampaignError(p, where, f"{key} to be a shipped gear set ("
                                     f"{', '.join(shipped_gear_sets())}) or a gear-set file",
                                     repr(value))
         return value, str(f), load_gear_set(f)
     except ModelError as exc:
-        raise CampaignError(p, where, "a gear set that loads", None, str(exc)) from exc
+        raise CampaignError(p, where, "a gear set that loads", None,
+                            f"{key} = {value!r}: {exc}") from exc

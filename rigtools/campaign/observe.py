@@ -207,8 +207,8 @@ def read_run(campaign: Campaign, run: CampaignRun) -> Recording:
         :func:`rigtools.ingest.read`: a DBC or mapping that does not fit, an OS error).
     """
     s = campaign.sensors_for(run)
-    meta = RunMetadata(run_id=run.id, rig=campaign.rig or None, gear_set=campaign.gear_set,
-                       conditions=run.numeric_conditions())
+    meta = RunMetadata(run_id=run.id, rig=campaign.rig or None,
+                       gear_set=campaign.gear_set_for(run.id), conditions=run.numeric_conditions())
     return read(run.file, dbc=s.dbc, mapping=s.mapping, fmt=s.format, metadata=meta)
 
 
@@ -303,8 +303,9 @@ def _observe_recording(campaign: Campaign, run: CampaignRun, rec: Recording,
                 run_flags.append("condition_unresolved")
                 notes.append(why)
 
-    # speed: the run's pinion speed, else the mean of the speed signal
-    z1, z2 = campaign.pinion_teeth, campaign.wheel_teeth
+    # speed: the run's pinion speed, else the mean of the speed signal; teeth of the run's pair
+    pair = campaign.gear_for(run.id).pair
+    z1, z2 = int(pair.pinion.teeth), int(pair.wheel.teeth)
     z_tracked = z1 if s.speed_shaft == "pinion" else z2
     profile: SpeedProfile | None = None
     speed_error: str | None = None
@@ -662,6 +663,10 @@ def observations_metadata(campaign: Campaign, runs: Sequence[Mapping[str, Any]]
         "campaign": campaign.to_dict(),
         "gear": {"name": campaign.gear.name, "z1": campaign.pinion_teeth,
                  "z2": campaign.wheel_teeth},
+        "run_gears": {r.id: {"gear_set": r.gear_set, "name": r.gear.name,
+                             "z1": int(r.gear.pair.pinion.teeth),
+                             "z2": int(r.gear.pair.wheel.teeth)}
+                      for r in campaign.runs if r.gear is not None},
         "harmonics": list(HARMONICS),
         "max_mesh_order": campaign.analysis.max_mesh_order,
         "flags": FLAGS,

@@ -9,6 +9,19 @@ speed, the mesh frequency, the amplitudes of the mesh harmonics :data:`HARMONICS
 :math:`A_{rms} = \sqrt{A_1^2 + A_2^2 + A_3^2}`, flagged ``low_snr`` when the weakest harmonic
 stands less than ``[analysis] low_snr_dB`` over the order-spectrum floor (same bandwidth).
 The other rows of a run are made by :mod:`rigtools.campaign.observe`.
+
+Direction
+---------
+Every arms row that holds a value says which way the speed goes there (``direction``: ``"up"``,
+``"down"`` or ``"hold"``; null on failed rows), so the run-up and run-down parts of a recording
+can be compared apart (jumps, hysteresis). Along a ramp (:func:`ramp_directions`) the slope of
+:math:`\ln f_m` against time is fitted by least squares over each window and its
+:data:`DIRECTION_NEIGHBOURS` neighbours either side (a noisy speed signal averages out over
+them); the row is ``"hold"`` when that slope changes the mesh frequency by less than
+``[analysis] step_rel_tolerance`` over the span of those windows, or lies within twice its
+standard error, else ``"up"`` or ``"down"`` by its sign. Speed steps (:func:`step_directions`)
+take the sign of the change from the previous step (the first step that of the change to the
+next, ``"up"`` when it is the only one), ``"hold"`` under the same relative tolerance.
 """
 
 from __future__ import annotations
@@ -31,10 +44,145 @@ from rigtools.campaign.observation_rows import ACCEL_TO_M_S2, finite_or_none, ro
 from rigtools.errors import RigtoolsError
 from rigtools.ingest.recording import Recording
 
-__all__ = ["HARMONICS", "arms_rows"]
+__all__ = ["DIRECTIONS", "DIRECTION_NEIGHBOURS", "HARMONICS", "arms_rows", "ramp_directions",
+           "step_directions"]
 
 #: The mesh harmonics whose amplitudes make Arms.
 HARMONICS: Final = (1, 2, 3)
+#: The values of the ``direction`` column (besides null).
+DIRECTIONS: Final = ("up", "down", "hold")
+#: Ramp windows either side of a window over which the slope of the speed is fitted.
+DIRECTION_NEIGHBOURS: Final = 3
+#: A ramp window's slope must exceed this many standard errors of its fit to give a direction.
+_SLOPE_SIGMAS: Final = 2.0
+#: Labels either side of a ramp window whose majority overrules a label alone among them.
+_MODE_HALF_WIDTH: Final = 2
+
+
+def ramp_directions(time_s: np.ndarray, mesh_frequency_Hz: np.ndarray, rel_tolerance: float,
+                    *, neighbours: int = DIRECTION_NEIGHBOURS) -> np.ndarray:
+    r"""Which way the speed goes at each window along a ramp.
+
+    Parameters
+    ----------
+    time_s : array_like
+        Centre times of the windows (s), shape ``(n,)``, in any order.
+    mesh_frequency_Hz : array_like
+        Mesh frequency of each window (Hz), shape ``(n,)``; non-finite or non-positive values
+        are left out of the fits (their own label is still given from their neighbours).
+    rel_tolerance : float
+        Relative change of the mesh frequency, over the span of the windows fitted, under which
+        a window is ``"hold"`` (``[analysis] step_rel_tolerance``).
+    neighbours : int
+        Windows either side (in time order) fitted with the window.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``"up"``, ``"down"`` or ``"hold"`` per window (dtype object), in the input order.
+
+    Notes
+    -----
+    For window :math:`i` and the windows :math:`j \in [i-k, i+k]` (in time order; at the
+    ends the :math:`2k+1` nearest), :math:`s_i` is the least-squares slope of
+    :math:`\ln f_{m,j}` against :math:`t_j`; the window is ``"hold"`` when :math:`|s_i|` times
+    the time those windows span is under :math:`\varepsilon`, or :math:`|s_i|` is within twice
+    its standard error from the fit's residuals (a noisy speed signal at a dwell), else the
+    sign of :math:`s_i`. A label that fewer of the five nearest windows (itself included)
+    carry than another is replaced by the most common one there.
+
+    Examples
+    --------
+    >>> t = np.arange(10.0)
+    >>> list(ramp_directions(t, 100.0 + 10.0 * np.minimum(t, 9.0 - t), 0.01))[::3]
+    ['up', 'up', 'down', 'down']
+    """
+    t = np.asarray(time_s, np.float64).ravel()
+    f = np.asarray(mesh_frequency_Hz, np.float64).ravel()
+    if t.shape != f.shape:
+        raise ValueError(f"`time_s` and `mesh_frequency_Hz` must have one shape, were "
+                         f"{t.shape} and {f.shape}")
+    if not rel_tolerance > 0:
+        raise ValueError(f"`rel_tolerance` must be > 0, was {rel_tolerance!r}")
+    k = int(neighbours)
+    if k < 1:
+        raise ValueError(f"`neighbours` must be >= 1, was {neighbours!r}")
+    out = np.full(t.shape, "hold", dtype=object)
+    order = np.argsort(t, kind="stable")
+    ts, fs = t[order], f[order]
+    good = np.isfinite(ts) & np.isfinite(fs) & (fs > 0)
+    lf = np.log(np.where(good, fs, 1.0))
+    labels = np.full(ts.shape, "hold", dtype=object)
+    for i in range(ts.size):
+        # 2k + 1 windows about i, shifted inwards at the ends (a fit as long as inside)
+        lo = min(max(0, i - k), max(0, ts.size - 2 * k - 1))
+        hi = min(ts.size, lo + 2 * k + 1)
+        sel = np.flatnonzero(good[lo:hi]) + lo
+        if sel.size < 2:
+            continue
+        tt, yy = ts[sel], lf[sel]
+        dt = tt - tt.mean()
+        den = float(np.sum(dt * dt))
+        if not den > 0:
+            continue
+        slope = float(np.sum(dt * (yy - yy.mean())) / den)
+        change = abs(slope) * float(tt[-1] - tt[0])
+        # a slope within twice its standard error is noise, not a direction
+        resid = yy - yy.mean() - slope * dt
+        se = (math.sqrt(float(np.sum(resid * resid)) / (sel.size - 2) / den)
+              if sel.size > 2 else 0.0)
+        if change >= rel_tolerance and abs(slope) > _SLOPE_SIGMAS * se:
+            labels[i] = "up" if slope > 0 else "down"
+    # a label alone among its neighbours is noise: take the majority of the five nearest
+    kept = labels.copy()
+    for i in range(ts.size):
+        near = list(labels[max(0, i - _MODE_HALF_WIDTH):i + _MODE_HALF_WIDTH + 1])
+        best = max(DIRECTIONS, key=near.count)
+        if near.count(best) > near.count(labels[i]):
+            kept[i] = best
+    out[order] = kept
+    return out
+
+
+def step_directions(speed_rpm: np.ndarray, rel_tolerance: float) -> np.ndarray:
+    """Which way the speed goes at each step of a stepped run-up.
+
+    Parameters
+    ----------
+    speed_rpm : array_like
+        Speed of each step (rpm), shape ``(n,)``, in time order.
+    rel_tolerance : float
+        Relative change from the previous step under which a step is ``"hold"``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``"up"``, ``"down"`` or ``"hold"`` per step (dtype object): the sign of the change
+        from the previous step; the first step that of the change to the next one (``"up"``
+        when there is none, or it is under the tolerance); None where the speed is not finite.
+
+    Examples
+    --------
+    >>> list(step_directions([1000.0, 2000.0, 3000.0, 2000.0, 2005.0], 0.01))
+    ['up', 'up', 'up', 'down', 'hold']
+    """
+    n = np.asarray(speed_rpm, np.float64).ravel()
+    if not rel_tolerance > 0:
+        raise ValueError(f"`rel_tolerance` must be > 0, was {rel_tolerance!r}")
+    out = np.full(n.shape, None, dtype=object)
+    idx = np.flatnonzero(np.isfinite(n) & (n > 0))
+
+    def label(a: float, b: float, tie: str) -> str:
+        if abs(b - a) < rel_tolerance * a:
+            return tie
+        return "up" if b > a else "down"
+
+    for j, i in enumerate(idx):
+        if j == 0:
+            out[i] = label(n[i], n[idx[1]], "up") if idx.size > 1 else "up"
+        else:
+            out[i] = label(n[idx[j - 1]], n[i], "hold")
+    return out
 
 
 def _order_floor_snr_db(sl: StepLevels, i: int) -> float | None:
@@ -117,6 +265,8 @@ def arms_rows(base: dict[str, Any], rec: Recording, name: str, rms_row: dict[str
     except (RigtoolsError, ValueError) as exc:
         return [row_status({**common, "status": "failed", "message": f"Arms per step: {exc}",
                             "_flags": ["arms_failed"]})]
+    directions = step_directions(np.array([st.speed_rpm for st in sl.steps]),
+                                 a.step_rel_tolerance)
     rows = []
     for i, st in enumerate(sl.steps):
         flags = list(ch_flags)
@@ -144,7 +294,7 @@ def arms_rows(base: dict[str, Any], rec: Recording, name: str, rms_row: dict[str
             msg.append(f"weakest mesh harmonic {snr:.1f} dB over the floor < {a.low_snr_dB:g} dB")
         f_mesh = float(sl.mesh_frequency_Hz[i])
         rows.append(row_status({
-            **row, "mesh_frequency_Hz": f_mesh,
+            **row, "mesh_frequency_Hz": f_mesh, "direction": directions[i],
             "step_speed_rpm": float(speed_rpm_from_mesh_frequency(f_mesh, z1)),
             "a1_m_s2": finite_or_none(amp[0]), "a2_m_s2": finite_or_none(amp[1]),
             "a3_m_s2": finite_or_none(amp[2]),
@@ -194,6 +344,7 @@ def _ramp_rows(common: dict[str, Any], rec: Recording, name: str, profile: Speed
                             f"{rc.revs_per_window} revolutions along the ramp"
                             + (f" (dropped: {dropped})" if dropped else ""),
                             "_flags": ["no_speed_step", "arms_failed"]})]
+    directions = ramp_directions(rc.time_s, rc.mesh_frequency_Hz, a.step_rel_tolerance)
     rows = []
     for i in range(len(rc.time_s)):
         flags = list(ch_flags)
@@ -212,7 +363,7 @@ def _ramp_rows(common: dict[str, Any], rec: Recording, name: str, profile: Speed
         rows.append(row_status({
             **common, "segment": "ramp", "step_index": i, "step_start_s": t - half,
             "step_stop_s": t + half, "n_windows": 1, "n_gaps": 0,
-            "mesh_frequency_Hz": f_mesh,
+            "mesh_frequency_Hz": f_mesh, "direction": directions[i],
             "step_speed_rpm": float(speed_rpm_from_mesh_frequency(f_mesh, z1)),
             "a1_m_s2": finite_or_none(amp[0]), "a2_m_s2": finite_or_none(amp[1]),
             "a3_m_s2": finite_or_none(amp[2]),

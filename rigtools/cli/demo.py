@@ -53,12 +53,17 @@ def add_parser(subparsers: Any) -> None:
                    help="output folder, created if needed (default demo-out): campaign/ "
                    "holds the generated campaign, results/ the report")
     p.add_argument("--size", choices=("full", "ci"), default="full",
-                   help="full: 12 runs of 8 s (default); ci: 8 runs of 3 s")
+                   help="full: 12 runs of 8 s and a run-up of 2 x 16 s (default); ci: 8 runs "
+                   "of 3 s and a run-up of 2 x 6 s")
     p.add_argument("--duration", type=_duration, default=None, metavar="S",
-                   help=f"length of each run in seconds, {MIN_DURATION_S:g} to "
+                   help=f"length of each FZG-C run in seconds, {MIN_DURATION_S:g} to "
                    f"{MAX_DURATION_S:g} (default by size)")
     p.add_argument("--seed", type=_seed, default=0,
                    help="random seed of the generated campaign, an integer >= 0 (default 0)")
+    p.add_argument("--no-runup", dest="runup", action="store_false",
+                   help="leave out the run-up of the Kahraman-Blankenship pair and its SDOF "
+                   "calibration (the FZG-C runs and the backlash calibration only; minutes "
+                   "shorter)")
     add_pipeline_options(p, seed=False, jobs=min(2, os.cpu_count() or 1))
     p.set_defaults(func=run)
 
@@ -71,12 +76,12 @@ def run(args: argparse.Namespace) -> int:
         return fail(problem)
     from tqdm import tqdm
 
-    from rigtools.demo.campaign import demo_conditions, generate_demo_campaign
+    from rigtools.demo.campaign import demo_run_count, generate_demo_campaign
 
     if not args.quiet:
         print(f"rigtools: generating the demo campaign ({args.size}) in {out / 'campaign'}",
               file=sys.stderr)
-    n_runs = len(demo_conditions(args.size))
+    n_runs = demo_run_count(args.size, runup=args.runup)
     bar = tqdm(total=n_runs, desc="generate", unit="run", file=sys.stderr,
                disable=args.quiet or not stderr_is_terminal())
 
@@ -92,7 +97,8 @@ def run(args: argparse.Namespace) -> int:
 
     with bar:
         demo = generate_demo_campaign(out / "campaign", seed=args.seed, size=args.size,
-                                      duration_s=args.duration, on_run=on_run)
+                                      duration_s=args.duration, runup=args.runup,
+                                      on_run=on_run)
     code = run_pipeline(args, demo.campaign_path, out / "results", truth=demo.truth_path)
     if not args.quiet:
         print(f"\nthe campaign file: {demo.campaign_path} (edit it, or point a copy at your "

@@ -67,6 +67,14 @@ runs only 183.4 and 302 N m at 90 degC.
 
 The housing mode (a bearing-cover mode at 4.9 kHz, ``zeta = 0.012``) does not move with load or
 temperature; it is 320 Hz from the mesh mode at 55 degC / 35.3 N m.
+
+The run-up
+----------
+The campaign's run-up run on the Kahraman-Blankenship pair (:mod:`rigtools.demo.runup`) has its
+own truth, :class:`RunUpTruth` (a VVMS model: damping ratio, stiffness and fluctuation scales,
+backlash, channel gains, the mesh natural frequency, the jump frequencies of its steady sweep),
+kept in :attr:`CampaignTruth.runup` and written as ``truth.json["runup"]`` in the run-up
+calibration's names.
 """
 
 from __future__ import annotations
@@ -104,6 +112,7 @@ __all__ = [
     "Regime",
     "RunCondition",
     "RunTruth",
+    "RunUpTruth",
     "TruePhysics",
     "campaign_truth",
     "closure_slope_from_seed",
@@ -402,6 +411,130 @@ class RunTruth:
 
 
 @dataclass(frozen=True)
+class RunUpTruth:
+    """What the run-up run was made from (:mod:`rigtools.demo.runup`).
+
+    In the run-up calibration's names (issue 20 contract).
+
+    Attributes
+    ----------
+    run_id, gear_set : str
+    model : str
+        The SDOF model of the truth (``"vvms"``).
+    torque_Nm : float
+        Pinion torque (N m).
+    zeta : float
+        Damping ratio relative to ``k_ref = s kbar_F0`` (-).
+    stiffness_scale, fluctuation_scale : float
+        ``s`` and ``eps`` (-).
+    backlash_m : float
+        Total backlash ``2 b`` on the line of action (m).
+    gains : dict of str to float
+        ``G_c`` per channel (-).
+    mesh_natural_frequency_Hz : float
+        ``sqrt(s kbar_F0 / m_e) / 2 pi`` (Hz).
+    model_natural_frequency_Hz : float
+        The same with the model's own mean stiffness at ``T / s`` (Hz): the linear resonance.
+    reference_stiffness_N_m : float
+        ``kbar_F0``: error-free mean FVMS at the torque (N/m).
+    equivalent_mass_kg : float
+        ``m_e`` (kg).
+    pinion_teeth : int
+    jump_frequency_up_Hz, jump_frequency_down_Hz : float
+        Mesh frequency of the largest jump of Arms in the up and in the down sweep (Hz).
+    contact_loss, backside_impact : bool
+        Whether the drive flanks separate / the back flanks are reached anywhere on the path.
+    speed_low_rpm, speed_high_rpm, ramp_duration_s : float
+        The ramp.
+    settling_time_s : float
+        ``1 / (zeta omega_n)`` (s).
+    crossing_ratio : float
+        Time to cross the half-power band over the settling time (-): quasi-static when large.
+    """
+
+    run_id: str
+    gear_set: str
+    model: str
+    torque_Nm: float
+    zeta: float
+    stiffness_scale: float
+    fluctuation_scale: float
+    backlash_m: float
+    gains: dict[str, float]
+    mesh_natural_frequency_Hz: float
+    model_natural_frequency_Hz: float
+    reference_stiffness_N_m: float
+    equivalent_mass_kg: float
+    pinion_teeth: int
+    jump_frequency_up_Hz: float
+    jump_frequency_down_Hz: float
+    contact_loss: bool
+    backside_impact: bool
+    speed_low_rpm: float
+    speed_high_rpm: float
+    ramp_duration_s: float
+    settling_time_s: float
+    crossing_ratio: float
+
+    def summary(self) -> dict[str, Any]:
+        """The ``"runup"`` block of ``truth.json``.
+
+        ``parameters`` and ``derived`` map the run-up calibration's names to ``{"value",
+        "unit"}`` (``gain@<channel>``, ``mesh_natural_frequency_Hz``,
+        ``mesh_natural_frequency_Hz@<run>``, ``jump_frequency_up_Hz@<run>`` /
+        ``..._down_Hz@<run>``); ``conventions`` names ``k_ref`` and ``m_e``.
+        """
+        def q(value: float, unit: str) -> dict[str, Any]:
+            return {"value": float(value), "unit": unit}
+
+        r = self.run_id
+        to_rpm = 60.0 / self.pinion_teeth
+        return {
+            "run_id": r, "gear_set": self.gear_set, "model": self.model,
+            "torque_Nm": self.torque_Nm,
+            "parameters": {
+                "zeta": q(self.zeta, "1"),
+                "mesh_stiffness_scale": q(self.stiffness_scale, "1"),
+                "fluctuation_scale": q(self.fluctuation_scale, "1"),
+                "backlash": q(self.backlash_m * 1e6, "um"),
+                **{f"gain@{c}": q(g, "1") for c, g in self.gains.items()},
+            },
+            "derived": {
+                "mesh_natural_frequency_Hz": q(self.mesh_natural_frequency_Hz, "Hz"),
+                f"mesh_natural_frequency_Hz@{r}": q(self.model_natural_frequency_Hz, "Hz"),
+                f"jump_frequency_up_Hz@{r}": q(self.jump_frequency_up_Hz, "Hz"),
+                f"jump_frequency_down_Hz@{r}": q(self.jump_frequency_down_Hz, "Hz"),
+            },
+            "jump_speed_rpm": {"up": self.jump_frequency_up_Hz * to_rpm,
+                               "down": self.jump_frequency_down_Hz * to_rpm},
+            "contact_loss": self.contact_loss,
+            "backside_impact": self.backside_impact,
+            "backlash_identifiable": self.backside_impact,
+            "ramp": {"speed_low_rpm": self.speed_low_rpm, "speed_high_rpm": self.speed_high_rpm,
+                     "ramp_duration_s": self.ramp_duration_s, "shape": "linear up, then down, "
+                     "no dwell", "settling_time_s": self.settling_time_s,
+                     "crossing_over_settling": self.crossing_ratio},
+            "conventions": {
+                "reference_stiffness": "k_ref = s kbar_F0, kbar_F0 the error-free mean FVMS "
+                                       "of the pair at the torque (models.stiffness.mesh_cycle)",
+                "reference_stiffness_N_m": self.reference_stiffness_N_m,
+                "equivalent_mass_kg": self.equivalent_mass_kg,
+                "equivalent_mass": "models.geometry.inertia.pair_equivalent_mass",
+                "mesh_natural_frequency_Hz": "sqrt(s kbar_F0 / m_e) / 2 pi",
+                "mesh_natural_frequency_Hz@run": "sqrt(s kbar_model(T / s) / m_e) / 2 pi",
+                "stiffness_scale": "every tooth compliance C / s: the mesh cycle at T / s "
+                                   "with its stiffnesses times s",
+                "backlash": "total 2b on the line of action",
+                "gain": "housing acceleration = G_c x DTE acceleration (flat accelerance); "
+                        "harmonic h: a = G_c (2 pi h f_m)^2 D_h",
+                "jump_frequency": "largest step of log Arms in each direction of the model's "
+                                  "periodic steady sweep along the ramp (midpoint, Hz)",
+                "pinion_teeth": self.pinion_teeth,
+            },
+        }
+
+
+@dataclass(frozen=True)
 class CampaignTruth:
     """The truth of a demo campaign.
 
@@ -412,12 +545,15 @@ class CampaignTruth:
     runs : tuple of RunTruth
     temperatures_C : tuple of float
         The campaign's bulk temperatures, ascending.
+    runup : RunUpTruth or None
+        The run-up run's truth, when the campaign has one.
     """
 
     physics: TruePhysics
     housing: HousingMode
     runs: tuple[RunTruth, ...]
     temperatures_C: tuple[float, ...]
+    runup: RunUpTruth | None = None
 
     def run(self, run_id: str) -> RunTruth:
         """The run of that id."""
@@ -434,7 +570,8 @@ class CampaignTruth:
         ``critical_gap@<T>C``, ``thermal_closure@<T>C`` and ``margin@<T>C`` at each campaign
         temperature and ``margin@<run id>`` (um), ``flip_temperature_C`` (degC); ``runs``
         maps a run id to its ``regime``, ``mesh_mode_Hz`` and conditions; ``conventions``
-        and ``housing_mode`` say how the numbers are meant.
+        and ``housing_mode`` say how the numbers are meant; ``runup`` (when the campaign has
+        a run-up) is :meth:`RunUpTruth.summary`.
         """
         p = self.physics
         um = 1e6
@@ -481,6 +618,7 @@ class CampaignTruth:
             },
             "housing_mode": {"f_n_Hz": self.housing.f_n_Hz, "zeta": self.housing.zeta,
                              "moves_with_load_or_temperature": False},
+            **({} if self.runup is None else {"runup": self.runup.summary()}),
         }
 
 

@@ -85,6 +85,9 @@ class RecordingBuilder:
         # second clocks of a channel, by clock name: (stamp_index parts, stamps_s parts)
         self._other_clocks: dict[str, dict[str, tuple[list[np.ndarray], list[np.ndarray]]]] = {}
         self._carriers: dict[str, dict[str, str | int]] = {}
+        # clock checks made, by the identity of their arrays (kept alive with the result)
+        self._clock_checks: dict[tuple[int, int, float],
+                                 tuple[np.ndarray, np.ndarray, float, dict[str, float]]] = {}
 
     def add_samples(
         self,
@@ -205,6 +208,21 @@ class RecordingBuilder:
         idx.append(np.asarray(stamp_index, np.int64))
         st.append(np.asarray(stamps_s, np.float64))
 
+    def _timebase_check(self, index: np.ndarray, stamps_s: np.ndarray,
+                        sample_rate_Hz: float) -> tuple[float, dict[str, float]]:
+        """:func:`timebase_check`, once for channels given the very same clock arrays.
+
+        The channels of one CAN message share their frames, hence one clock: the check of
+        the first is the check of the others.
+        """
+        key = (id(index), id(stamps_s), float(sample_rate_Hz))
+        hit = self._clock_checks.get(key)
+        if hit is not None and hit[0] is index and hit[1] is stamps_s:
+            return hit[2], dict(hit[3])
+        t0, stats = timebase_check(index, stamps_s, sample_rate_Hz)
+        self._clock_checks[key] = (index, stamps_s, t0, dict(stats))
+        return t0, stats
+
     def _check_other_clocks(self, name: str, sample_rate_Hz: float, t0: float) -> None:
         """Fill ``report.timebase[f"{name}@{clock}"]`` for each second clock of a channel."""
         for clock, (idx, st) in sorted(self._other_clocks.pop(name, {}).items()):
@@ -268,6 +286,7 @@ class RecordingBuilder:
             ch = self._build_channel(name, self._choose_layout(name, self._channels.pop(name)))
             if ch is not None:
                 channels[name] = ch
+        self._clock_checks.clear()
         slow = {}
         for name in sorted(self._slow):
             s = self._build_slow(name, self._slow.pop(name))
@@ -412,7 +431,7 @@ class RecordingBuilder:
             if si.size > MAX_CLOCK_POINTS:  # the clock check needs no more than this
                 pick = np.linspace(0, si.size - 1, MAX_CLOCK_POINTS).astype(np.int64)
                 si, st = si[pick], st[pick]
-            t0, stats = timebase_check(si, st, parts.sample_rate_Hz)
+            t0, stats = self._timebase_check(si, st, parts.sample_rate_Hz)
             self.report.timebase[name] = stats
             if stats.get("n_stamps_backwards", 0):
                 self.report.warn(

@@ -13,6 +13,7 @@ Two sources:
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 import tomllib
@@ -119,6 +120,30 @@ def load_mapping(path: str | Path) -> ChannelMapping:
         its line.
     """
     p = Path(path)
+    try:
+        st = p.stat()
+    except OSError:
+        return _load_mapping(p)  # raises the error of a missing or unreadable file
+    if not p.is_file():
+        return _load_mapping(p)
+    m = _load_mapping_cached(str(p), st.st_mtime_ns, st.st_size)
+    if m.run is None:
+        return m
+    # the run metadata holds dicts a caller may change: each read gets its own
+    run = m.run
+    return ChannelMapping(m.uniform, m.slow, RunMetadata(run.run_id, run.rig, run.gear_set,
+                                                         dict(run.conditions),
+                                                         dict(run.extra)), m.source)
+
+
+@functools.lru_cache(maxsize=8)
+def _load_mapping_cached(path: str, mtime_ns: int, size: int) -> ChannelMapping:
+    """A mapping file parsed and validated once per file version (the result is frozen)."""
+    return _load_mapping(Path(path))
+
+
+def _load_mapping(p: Path) -> ChannelMapping:
+    """Read and validate a mapping file (see :func:`load_mapping`)."""
     try:
         text = p.read_text(encoding="utf-8")
         doc = tomllib.loads(text)

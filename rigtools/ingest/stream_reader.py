@@ -30,7 +30,7 @@ from typing import Any, BinaryIO, Final
 from rigtools.errors import NoDataError
 from rigtools.ingest.builder import RecordingBuilder
 from rigtools.ingest.contract import ReadRequest
-from rigtools.ingest.files import open_source, sha256_of
+from rigtools.ingest.files import open_source, sha256_of, source_sha256
 from rigtools.ingest.layout import ChannelMapping, load_mapping
 from rigtools.ingest.recording import IngestReport, Provenance, Recording, RunMetadata
 
@@ -91,8 +91,10 @@ class StreamReader(ABC):
     units : str
         What the report counts: ``"frames"`` or ``"messages"``.
     hash_while_decoding : bool
-        Hash the file in the second thread while it is decoded (True), or only while the
-        channels are built after it (False, for a decoder that keeps a second core busy).
+        Hash the file's bytes as the decoder reads them, in order, in its own thread (True:
+        no second pass over the file, no second core), or in a second thread while the
+        channels are built after decoding (False, for a decoder that reads its file at
+        positions and keeps a second core busy).
     """
 
     name: str
@@ -143,9 +145,11 @@ class StreamReader(ABC):
         NoDataError
             The file reads but holds no decodable channel or slow signal.
         """
-        # The hash runs in a second thread (hashlib releases the GIL): beside the decoder for
-        # CAN logs; for MCAP, whose reader keeps a decompression worker busy on the second
-        # core, beside the building of the channels instead.
+        # CAN logs are read in order: their bytes are hashed as they are read (no second pass
+        # over the file, no second core taken from a machine running several reads). MCAP is
+        # read at positions by a reader that keeps a decompression worker busy on the second
+        # core: its file is hashed in a second thread (hashlib releases the GIL) beside the
+        # building of the channels.
         hasher = ThreadPoolExecutor(max_workers=1, thread_name_prefix="rigtools-sha256")
         try:
             return self._read_with(path, request, hasher)
@@ -155,9 +159,8 @@ class StreamReader(ABC):
     def _read_with(
         self, p: Path, request: ReadRequest, hasher: ThreadPoolExecutor
     ) -> Recording:
-        hashing: Future[tuple[str, int]] | None = (
-            hasher.submit(sha256_of, p) if self.hash_while_decoding else None
-        )
+        hashing: Future[tuple[str, int]] | None = None
+        own_digest: tuple[str, int] | None = None
         mapping = request.mapping
         if isinstance(mapping, str | Path):
             mapping = load_mapping(mapping)
@@ -165,14 +168,19 @@ class StreamReader(ABC):
         builder = RecordingBuilder(str(p), report)
         with open_source(p, report) as stream, _watching(stream, p, request.progress):
             decoded = self.decode(stream, str(p), builder, report, mapping, request)
+            if self.hash_while_decoding:
+                own_digest = source_sha256(stream)
         meta = _merge_metadata(decoded.metadata, mapping, request.metadata, report)
         # Through JSON once, so the layout compares equal after a Parquet round trip.
         layout_desc = json.loads(json.dumps(decoded.layout))
-        if hashing is None:
+        if own_digest is None:
             hashing = hasher.submit(sha256_of, p)
         placeholder = Provenance(str(p), "", 0, self.name, versions(), report, layout_desc)
         rec = builder.build(meta, placeholder)
-        digest, size = hashing.result()
+        if own_digest is None:
+            assert hashing is not None  # submitted above
+            own_digest = hashing.result()
+        digest, size = own_digest
         rec = dataclasses.replace(rec, provenance=dataclasses.replace(
             rec.provenance, source_sha256=digest, source_size_bytes=size))
         if not rec.channels and not rec.slow:

@@ -10,17 +10,25 @@ mistaken for a short one), and to report how far the logger clock strays from th
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TypeAlias
 
 import numpy as np
 
 __all__ = [
+    "Payload",
     "UnwrappedCounter",
     "counter_outliers",
     "indices_from_stamps",
     "timebase_check",
     "unwrap_counter",
 ]
+
+
+#: Fingerprints of the elements' payloads for :func:`unwrap_counter`: an array, or a callable
+#: that makes it (called only when a replay must be told from a restart, which is rare).
+Payload: TypeAlias = np.ndarray | Callable[[], np.ndarray]
 
 
 @dataclass(frozen=True)
@@ -143,7 +151,7 @@ def unwrap_counter(
     modulus: int,
     stamps_s: np.ndarray | None = None,
     tick_rate_Hz: float | None = None,
-    payload: np.ndarray | None = None,
+    payload: Payload | None = None,
 ) -> UnwrappedCounter:
     """Unwrap a modular sample counter into absolute ticks.
 
@@ -158,10 +166,11 @@ def unwrap_counter(
         long gaps (see Notes). NaN, Inf and outlying stamps are tolerated.
     tick_rate_Hz : float, optional
         Nominal counter rate (ticks per second).
-    payload : numpy.ndarray, optional
+    payload : numpy.ndarray or callable, optional
         One fingerprint per element (any array whose rows compare equal when the payloads
         do), used to tell a replayed run from a restart when the clock steps back with the
-        counter (see Notes).
+        counter (see Notes); or a callable returning that array, called only then (the
+        fingerprints of a clean recording are never computed).
 
     Returns
     -------
@@ -202,7 +211,7 @@ def unwrap_counter(
         good = np.flatnonzero(~outlier)
         sub = _unwrap(c[good], int(modulus),
                       None if stamps_s is None else np.asarray(stamps_s, np.float64)[good],
-                      tick_rate_Hz, None if payload is None else np.asarray(payload)[good])
+                      tick_rate_Hz, _subset(payload, good))
         ticks = np.empty(n, np.int64)
         ticks[good] = sub.ticks
         prev = np.maximum.accumulate(np.where(outlier, -1, np.arange(n)))
@@ -215,12 +224,22 @@ def unwrap_counter(
     return _unwrap(c, int(modulus), stamps_s, tick_rate_Hz, payload)
 
 
+def _subset(payload: Payload | None, rows: np.ndarray) -> Payload | None:
+    """The fingerprints of ``rows`` only, still lazy when ``payload`` is."""
+    if payload is None:
+        return None
+    if callable(payload):
+        make = payload
+        return lambda: np.asarray(make())[rows]
+    return np.asarray(payload)[rows]
+
+
 def _unwrap(
     c: np.ndarray,
     m: int,
     stamps_s: np.ndarray | None,
     tick_rate_Hz: float | None,
-    payload: np.ndarray | None = None,
+    payload: Payload | None = None,
 ) -> UnwrappedCounter:
     n = c.shape[0]
     d = np.diff(c) % m
@@ -271,7 +290,7 @@ def _unwrap(
         # The clock went back with the counter: a replay only if the run repeats what was
         # received at those ticks; different payloads mean a genuine restart that coincided
         # with a logger clock step (NTP/PTP adjustment).
-        fp = np.asarray(payload)
+        fp = np.asarray(payload() if callable(payload) else payload)
         order = np.argsort(ticks, kind="stable")
         for q in replay_candidates[:MAX_REPLAY_CHECKS]:
             if _payload_differs(ticks, order, fp, q):
@@ -400,6 +419,11 @@ def timebase_check(
         "n_stamps_backwards": float(np.count_nonzero(np.diff(t) < 0)),
     }
     if t.size > 2 and np.ptp(idx) > 0:
-        slope = np.polyfit(idx / float(sample_rate_Hz), resid, 1)[0]
+        # least-squares slope of the residual over time (what a degree-1 polyfit gives),
+        # in closed form on centred values instead of an SVD; np.sum, not a BLAS dot, whose
+        # threaded sum depends on the thread count, and the report must not
+        x = idx / float(sample_rate_Hz)
+        x -= x.mean()
+        slope = float(np.sum(x * (resid - resid.mean()))) / float(np.sum(x * x))
         stats["drift_ppm"] = float(slope * 1e6)
     return t0, stats

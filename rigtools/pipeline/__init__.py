@@ -3,7 +3,8 @@
 Modules: ``stems`` (:func:`run_file_stem`, the file stem of a run id), ``atomic`` (atomic
 writes), ``cache`` (stage keys), ``progress`` (tqdm bars or log lines), ``executor`` (in
 process, process pool, dask), ``run_tasks`` (ingest and observe of one run, sent to workers),
-``stages`` (the four stages), ``result`` (:class:`PipelineResult`, ``pipeline.json``),
+``stages`` (the four stages), ``runup_stage`` (the run-up part of the calibrate stage),
+``result`` (:class:`PipelineResult`, ``pipeline.json``),
 ``errors`` and ``run`` (:func:`run_campaign`).
 
 :func:`run_campaign` and :class:`PipelineResult` are imported on first use: a worker process

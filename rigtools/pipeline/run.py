@@ -16,6 +16,8 @@ OUTDIR (issue 19 contract)::
     spectra/<stem>.parquet         the Welch spectra the peaks were found on
     observations.parquet           the observations table of the campaign
     calibration/                   summary.json, summary.csv, posterior.nc, chains.h5, PNGs
+    calibration/runup/             the SDOF run-up calibration: <model>/posterior.nc and
+                                   summary.json, comparison.json/.csv, runup_<stem>.png
     demo_truth.json                the demo's truth (with ``truth``)
     report.json, report.html       rigtools.report
 
@@ -136,11 +138,14 @@ def _tasks(campaign: Campaign, out: Path) -> list[RunTask]:
             "file": str(run.file), "dbc": hashes.of(s.dbc), "map": hashes.of(s.mapping),
             "format": s.format,
             "metadata": {"run_id": run.id, "rig": campaign.rig or None,
-                         "gear_set": campaign.gear_set,
+                         "gear_set": campaign.gear_set_for(run.id),
                          "conditions": run.numeric_conditions()}}
+        observe_parts: dict[str, Any] = {"run": entry, "campaign": shared}
+        if run.gear_set_path is not None:   # a run on its own pair: that file's contents too
+            observe_parts["run_gear_set_file"] = hashes.of(run.gear_set_path)
         tasks.append(RunTask(campaign=campaign, run=run, outdir=str(out),
                              stem=run_file_stem(run.id), ingest_parts=ingest_parts,
-                             observe_parts={"run": entry, "campaign": shared}))
+                             observe_parts=observe_parts))
     return tasks
 
 
@@ -248,8 +253,7 @@ def run_campaign(campaign: Campaign | str | Path, outdir: str | Path, *, jobs: i
                          times.get("ingest", 0.0)),
         "observe": _reuse(observed, _combined_key([r.observe_key for r in runs]),
                           times.get("observe", 0.0)),
-        "calibrate": {"key": cal.key, "elapsed_s": cal.elapsed_s, "reused": cal.reused,
-                      "status": cal.status, "error": cal.error},
+        "calibrate": cal.stage_document(),
         "report": {"elapsed_s": 0.0},
     }
     settings = {"jobs": int(jobs), "dask": dask, "seed": seed}

@@ -20,7 +20,10 @@ Each stage reads the files the stage before wrote into OUTDIR and writes its own
     are moved into place one by one, then ``calibration/summary.key``. A
     :class:`~rigtools.calibration.CalibrationError` (no usable run, priors that exclude the
     data; or a :class:`models.errors.ModelError` of the physics) is a failed stage, not a
-    crash.
+    crash. Then the run-up part (:func:`rigtools.pipeline.runup_stage.runup_part`: the SDOF
+    models against the Arms run-ups when ``[calibration] models`` is not empty and the table
+    has run-ups), under its own key in ``calibration/runup``; it fails alone
+    (:attr:`CalibrateOutcome.runup`), whatever the natural-frequency part did.
 :func:`report_stage`
     :func:`rigtools.report.build_report` of OUTDIR.
 """
@@ -36,7 +39,7 @@ import platform
 import shutil
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any, Final, Literal
@@ -71,6 +74,12 @@ from rigtools.pipeline.run_tasks import (
     ingest_run,
     observe_run_task,
     read_run_rows,
+)
+from rigtools.pipeline.runup_stage import (
+    RunUpOutcome,
+    clear_runup_outputs,
+    run_gear_sets,
+    runup_part,
 )
 from rigtools.plots.calibration import calibration_figures
 from rigtools.report import build_report
@@ -234,7 +243,11 @@ class CalibrateOutcome:
     summary : dict or None
         ``calibration/summary.json`` when the stage is ok.
     warnings : tuple of str
-        The calibration's warnings (not converged, runs left out, ...).
+        The calibration's warnings (not converged, runs left out, ...), the run-up part's
+        after them.
+    runup : RunUpOutcome or None
+        The run-up part (None when the stage did not get to it). ``status``, ``error``,
+        ``key``, ``reused`` and ``elapsed_s`` above are the natural-frequency part's.
     """
 
     status: Literal["ok", "failed", "skipped"]
@@ -244,16 +257,41 @@ class CalibrateOutcome:
     elapsed_s: float
     summary: dict[str, Any] | None = None
     warnings: tuple[str, ...] = ()
+    runup: RunUpOutcome | None = None
+
+    def stage_document(self) -> dict[str, Any]:
+        """``pipeline.json`` ``stages.calibrate``.
+
+        This part's status, error, key, reuse and time, and the run-up part under ``runup``
+        (:meth:`RunUpOutcome.to_dict`).
+        """
+        doc: dict[str, Any] = {"key": self.key, "elapsed_s": self.elapsed_s,
+                               "reused": self.reused, "status": self.status,
+                               "error": self.error}
+        if self.runup is not None:
+            doc["runup"] = self.runup.to_dict()
+        return doc
+
+
+#: ``[calibration]`` keys only the run-up part reads (left out of the natural-frequency key).
+_RUNUP_ONLY_KEYS: Final = frozenset({"models", "runup"})
 
 
 def _calibration_key(campaign: Campaign, observations: Path, seed: int | None) -> str:
     d = campaign.to_dict()
     gear_file = Path(campaign.gear_set_path)
-    return stage_key("calibrate", {
+    block = campaign.calibration
+    if block is not None:
+        block = {k: v for k, v in block.items() if k not in _RUNUP_ONLY_KEYS}
+    parts: dict[str, Any] = {
         "observations_sha256": file_sha256(observations),
         "gear_set": d["campaign"]["gear_set_path"],
         "gear_set_sha256": file_sha256(gear_file) if gear_file.is_file() else None,
-        "thermal": d["thermal"], "calibration": campaign.calibration, "seed": seed})
+        "thermal": d["thermal"], "calibration": block, "seed": seed}
+    own = run_gear_sets(campaign)
+    if own:  # which runs are on the campaign's gear set decides which runs are fitted
+        parts["run_gear_sets"] = own
+    return stage_key("calibrate", parts)
 
 
 def _clear_calibration(cal: Path) -> None:
@@ -288,6 +326,24 @@ def calibrate_stage(campaign: Campaign, outdir: Path, *, seed: int | None,
     OSError
         An output could not be written (names the file).
     """
+    t0 = time.perf_counter()
+    fn = _fn_part(campaign, outdir, seed=seed, progress=progress, run_ok=run_ok)
+    if not run_ok:
+        runup = RunUpOutcome("skipped", "no run could be read and analysed", "", False, 0.0)
+        clear_runup_outputs(outdir / CALIBRATION_DIR)
+    else:
+        runup = runup_part(campaign, outdir, outdir / OBSERVATIONS_FILE, seed=seed,
+                           progress=progress)
+    warnings = fn.warnings + runup.warnings
+    if runup.status == "failed":
+        warnings += (f"the run-up calibration (SDOF models) failed: {runup.error}",)
+    progress.debug("calibrate: %.1f s in all", time.perf_counter() - t0)
+    return replace(fn, warnings=warnings, runup=runup)
+
+
+def _fn_part(campaign: Campaign, outdir: Path, *, seed: int | None, progress: Progress,
+             run_ok: bool) -> CalibrateOutcome:
+    """The natural-frequency calibration (the stage before the run-up part)."""
     t0 = time.perf_counter()
     cal = outdir / CALIBRATION_DIR
     key_file = key_path(cal, _CALIBRATION_KEY)

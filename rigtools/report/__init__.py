@@ -3,7 +3,8 @@
 Modules: ``inputs`` (the stage files read into plain dataclasses), ``content`` (data quality,
 runs, provenance, and the assembled report.json document), ``assessment`` (the calibration
 judged against the campaign's checks: verdict, model versus experiment, convergence, truth
-comparison), ``values`` (stage-JSON values turned into report values), ``figures``
+comparison), ``runup_section`` (the run-up calibration of the SDOF models: its files and its
+section), ``values`` (stage-JSON values turned into report values), ``figures``
 (matplotlib figures drawn from the content), ``html`` (the jinja2 page, autoescaped), ``atomic``
 (temporary file, fsync, rename), ``build`` (:func:`build_report`), ``errors``.
 """

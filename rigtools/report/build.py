@@ -1,7 +1,8 @@
 """Build the report of an OUTDIR: read the stage files, write ``report.json`` and ``report.html``.
 
 :func:`build_report` reads only the files the stages wrote (:mod:`rigtools.report.inputs`),
-computes the content (:mod:`rigtools.report.content`), draws the figures
+with the run-up calibration's (:mod:`rigtools.report.runup_section`), computes the content
+(:mod:`rigtools.report.content`), draws the figures
 (:mod:`rigtools.report.figures`), renders the page (:mod:`rigtools.report.html`) and writes
 both files atomically (:mod:`rigtools.report.atomic`). Both documents are complete in memory
 before anything is written; the old ``report.html`` is removed first, so a report interrupted
@@ -23,6 +24,7 @@ from rigtools.report.content import report_content
 from rigtools.report.figures import png_base64, spectrum_figure, verdict_figure
 from rigtools.report.html import render_html
 from rigtools.report.inputs import CALIBRATION_FIGURES, ReportInputs, read_inputs
+from rigtools.report.runup_section import FIGURE_PREFIX, RunUpInputs, read_runup_inputs
 
 __all__ = ["REPORT_HTML", "REPORT_JSON", "ReportPaths", "build_report", "report_figures"]
 
@@ -47,8 +49,12 @@ class ReportPaths:
     content: dict[str, Any]
 
 
-def report_figures(inputs: ReportInputs, content: dict[str, Any]) -> dict[str, str]:
-    """Every figure of the page as a base64 PNG, keyed as :func:`.html.render_html` expects."""
+def report_figures(inputs: ReportInputs, content: dict[str, Any],
+                   runup: RunUpInputs | None = None) -> dict[str, str]:
+    """Every figure of the page as a base64 PNG, keyed as :func:`.html.render_html` expects.
+
+    The run-up figures (``runup:<run id>``) are those the ``runup_calibration`` section lists.
+    """
     figs: dict[str, str] = {}
     fig = verdict_figure(content["verdict"])
     if fig is not None:
@@ -60,6 +66,12 @@ def report_figures(inputs: ReportInputs, content: dict[str, Any]) -> dict[str, s
     for name in CALIBRATION_FIGURES:
         if name in content["status"]["calibration_figures"]:
             figs[name] = base64.b64encode(inputs.figures[name]).decode("ascii")
+    section = content.get("runup_calibration")
+    if runup is not None and section is not None:
+        for entry in section["figures"]:
+            png = runup.figures.get(entry["run_id"])
+            if png is not None and entry["key"].startswith(FIGURE_PREFIX):
+                figs[entry["key"]] = base64.b64encode(png).decode("ascii")
     return figs
 
 
@@ -87,9 +99,10 @@ def build_report(outdir: str | Path, *, generated_at: datetime | None = None) ->
     """
     base = Path(outdir)
     inputs = read_inputs(base)
-    content = report_content(inputs, generated_at=generated_at)
+    runup = read_runup_inputs(base, inputs.pipeline)
+    content = report_content(inputs, runup=runup, generated_at=generated_at)
     text_json = json.dumps(content, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
-    text_html = render_html(content, report_figures(inputs, content))
+    text_html = render_html(content, report_figures(inputs, content, runup))
     paths = ReportPaths(json=base / REPORT_JSON, html=base / REPORT_HTML, content=content)
     remove_stale_temporaries(base, (REPORT_JSON, REPORT_HTML))
     with contextlib.suppress(FileNotFoundError):

@@ -19,6 +19,10 @@ Sections (schema ``data_schemas/report.schema.json``):
     The calibration's ``summary.json`` as written (null when the calibration is absent or
     failed); ``demo_truth`` and ``truth_comparison`` (:mod:`rigtools.report.assessment`) for
     the demo.
+``runup_calibration``
+    Only when the campaign has a run-up calibration (issue 20): the SDOF models compared,
+    their damping and mesh natural frequency, the backlash statement, the figures and the
+    demo's truth beside them (:mod:`rigtools.report.runup_section`).
 
 Numbers that are not finite become null (:mod:`rigtools.report.values`). Strings from
 recordings and campaigns are carried as they are; the page escapes them.
@@ -39,6 +43,7 @@ from rigtools.report.assessment import (
     verdict,
 )
 from rigtools.report.inputs import CALIBRATION_FIGURES, ReportInputs, run_list
+from rigtools.report.runup_section import RunUpInputs, runup_section
 from rigtools.report.values import as_dict, as_float, as_int, as_str, plain
 
 __all__ = [
@@ -241,14 +246,17 @@ def _provenance(inputs: ReportInputs, data_quality: list[dict[str, Any]]) -> dic
 # the whole report
 
 
-def report_content(inputs: ReportInputs, *, generated_at: datetime | None = None
-                   ) -> dict[str, Any]:
+def report_content(inputs: ReportInputs, *, runup: RunUpInputs | None = None,
+                   generated_at: datetime | None = None) -> dict[str, Any]:
     """The report.json document of an OUTDIR's files.
 
     Parameters
     ----------
     inputs : ReportInputs
         :func:`rigtools.report.inputs.read_inputs` of the OUTDIR.
+    runup : RunUpInputs, optional
+        :func:`rigtools.report.runup_section.read_runup_inputs` of the OUTDIR; without it (or
+        without run-up files) the document has no ``runup_calibration`` section.
     generated_at : datetime, optional
         Time stamp of the report (volatile); default now (UTC).
 
@@ -313,4 +321,9 @@ def report_content(inputs: ReportInputs, *, generated_at: datetime | None = None
     if inputs.truth is not None:
         doc["demo_truth"] = plain(inputs.truth)
         doc["truth_comparison"] = truth_comparison(inputs.truth, inputs.summary, run_ids)
+    section = runup_section(runup, inputs.truth)
+    if section is not None:
+        doc["runup_calibration"] = section
+        if section["status"] == "failed":
+            notes.append(f"run-up calibration failed: {section['error']}")
     return plain(doc)

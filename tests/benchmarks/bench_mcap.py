@@ -6,9 +6,10 @@ Writes a 60 s, 4-channel, 25.6 kHz recording of protobuf ``rigtools.AccelBatch``
 * ``read``: samples per second of ``rigtools.ingest.read`` (everything: SHA-256 of the file,
   container, decoding, the builder's float64 grid and validity mask, provenance);
 * ``mcap bare``: time of ``make_reader(f).iter_messages()`` with no decoding over the same file;
-* ``ratio`` = mcap bare / read (target >= 1.0: the full ingest at least as fast as mcap's bare
+* ``ratio`` = mcap bare / read (issue 21's goal >= 1.2: the full ingest faster than mcap's bare
   iteration);
-* ``decompress only``: chunk decompression alone, the ceiling for any reader;
+* ``decompress only``: chunk decompression alone, the ceiling for any reader, and the distance
+  to it (read time over decompression time);
 * a breakdown of ``read``: rigtools' container layer alone (``iter_messages``), ``ingest``
   into a builder without building (and its ratio to mcap's bare iteration), and the SHA-256
   of the file.
@@ -37,6 +38,8 @@ DURATION_S = 60.0
 N_CHANNELS = 4
 FS = 25_600.0
 REPEATS = 5
+#: Issue 21: read() of protobuf batches at least this many times faster than bare iteration.
+RATIO_GOAL = 1.2
 
 
 def _best(fn: Callable[[], object], repeats: int = REPEATS) -> float:
@@ -146,7 +149,10 @@ def report(name: str, m: dict[str, float]) -> str:
         f"  rigtools.ingest.read      {m['read_s'] * 1e3:8.1f} ms  "
         f"{m['samples'] / m['read_s'] / 1e6:7.1f} Msamples/s",
         f"  mcap bare iter_messages   {m['mcap_bare_s'] * 1e3:8.1f} ms",
-        f"  ratio mcap bare / read    {m['ratio']:8.2f}   (target >= 1.0)",
+        f"  ratio mcap bare / read    {m['ratio']:8.2f}   (issue 21 goal >= {RATIO_GOAL:g}: "
+        f"{'met' if m['ratio'] >= RATIO_GOAL else 'NOT met'})",
+        f"  read / decompress only    {m['read_s'] / m['decompress_s']:8.2f}   (distance to "
+        "the ceiling; goal beyond issue 21: <= 2)",
         f"  decompress only (ceiling) {m['decompress_s'] * 1e3:8.1f} ms  "
         f"{mb / m['decompress_s']:7.0f} MB/s  {m['samples'] / m['decompress_s'] / 1e6:7.1f} "
         "Msamples/s",

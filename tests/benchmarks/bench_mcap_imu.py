@@ -9,12 +9,14 @@ prints:
   time base, the builder's grid and masks, provenance);
 * ``ingest``: the same without hashing and building (container and decoding);
 * ``mcap bare``: ``make_reader(f).iter_messages()`` with no decoding, and the ratio
-  ``mcap bare / read`` (the issue's target: >= 10);
+  ``mcap bare / read`` (issue 11's target >= 10; issue 21's, with margin on a busy
+  machine, >= 15);
 * ``rigtools general``: rigtools' reader with the CDR fast path switched off (every message
   decoded on its own, as before issue 11);
 * ``mcap + mcap_ros2``: ``iter_decoded_messages`` with ``mcap-ros2-support``'s decoder, the
   general path of the issue;
-* ``decompress only``: zstd decompression of every chunk, the ceiling for any reader;
+* ``decompress only``: zstd decompression of every chunk, the ceiling for any reader, and
+  the distance to it (read time over decompression time);
 * peak memory: each of a library call and the command line's set-up
   (``rigtools.cli.tune_allocator``) reads the file in a fresh child process after a 1 s file
   of the same kind; the high-water resident set above that baseline is printed against the
@@ -59,9 +61,10 @@ T0_NS = 1_700_000_000_000_000_000
 SLOW_TOPICS = ("/rig/temperature", "/rig/speed", "/rig/torque")
 SLOW_RATE_HZ = 10.0
 REPEATS = 3
-#: Targets of issue 11: read at least this many times faster than mcap's bare iteration, and
-#: peak resident memory above the baseline at most this many times the decoded arrays.
-SPEED_TARGET = 10.0
+#: Targets of issues 11 and 21: read at least this many times faster than mcap's bare
+#: iteration (issue 11 asked 10x; issue 21 asks 15x, a margin on a busy machine), and peak
+#: resident memory above the baseline at most this many times the decoded arrays.
+SPEED_TARGET = 15.0
 MEMORY_TARGET = 2.0
 
 
@@ -249,7 +252,8 @@ def report(m: dict[str, float]) -> str:
             f"  ratio mcap bare / ingest        {m['mcap_bare_s'] / m['ingest_s']:8.1f}",
             f"  ratio rigtools general / read   {m['general_s'] / m['read_s']:8.1f}",
             f"  ratio mcap_ros2 / read          {m['mcap_ros2_s'] / m['read_s']:8.1f}",
-            f"  read / decompress only          {m['read_s'] / m['decompress_s']:8.1f}",
+            f"  read / decompress only          {m['read_s'] / m['decompress_s']:8.1f}   "
+            "(distance to the ceiling; goal beyond issue 21: <= 2)",
             f"  peak RSS above baseline: library {m['peak_library_bytes'] / 1e6:.1f} MB, "
             f"cli {m['peak_cli_bytes'] / 1e6:.1f} MB; decoded arrays {dec_mb:.1f} MB "
             f"(ratio {m['peak_library_bytes'] / m['decoded_bytes']:.2f} / "

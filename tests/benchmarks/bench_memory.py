@@ -29,7 +29,7 @@ N_CH = 4
 
 _CHILD = textwrap.dedent(
     """
-    import json, sys
+    import json, sys, time
     from rigtools.ingest import read
 
     def status(key):
@@ -44,10 +44,12 @@ _CHILD = textwrap.dedent(
         tune_allocator()
     read(small)
     base = status("VmRSS:")
+    t0 = time.perf_counter()
     rec = read(big)
+    read_s = time.perf_counter() - t0
     peak = status("VmHWM:")
     n = sum(len(c) for c in rec.channels.values())
-    print(json.dumps({"base": base, "peak": peak, "n_samples": n,
+    print(json.dumps({"base": base, "peak": peak, "n_samples": n, "read_s": read_s,
                       "rejected": rec.report.n_rejected, "gaps": len(rec.report.gaps)}))
     """
 )
@@ -77,22 +79,29 @@ def write_files(folder: Path, seconds: float, fmt: str) -> Path:
     return folder / f"big.{fmt}"
 
 
+def read_in_child(small: Path, big: Path, mode: str = "library") -> dict[str, float]:
+    """Read ``big`` in a fresh process after a warm-up read of ``small``; return its figures.
+
+    ``base`` and ``peak`` are the resident set after the warm-up and its high-water mark
+    (bytes), ``read_s`` the time of ``read(big)``, ``ratio`` the peak above the base per byte
+    of decoded float64 samples.
+    """
+    run = subprocess.run([sys.executable, "-c", _CHILD, str(small), str(big), mode],
+                         check=True, capture_output=True, text=True)
+    r = json.loads(run.stdout.strip().splitlines()[-1])
+    r["mode"] = mode
+    r["file_bytes"] = big.stat().st_size
+    r["decoded_bytes"] = r["n_samples"] * 8
+    r["ratio"] = (r["peak"] - r["base"]) / r["decoded_bytes"]
+    return r
+
+
 def measure(fmt: str, seconds: float) -> list[dict[str, float]]:
     """Write once, read in a child per mode (library call, command line), return figures."""
-    out = []
     with tempfile.TemporaryDirectory() as tmp:
         big = write_files(Path(tmp), seconds, fmt)
         small = Path(tmp) / f"small.{fmt}"
-        for mode in ("library", "cli"):
-            run = subprocess.run([sys.executable, "-c", _CHILD, str(small), str(big), mode],
-                                 check=True, capture_output=True, text=True)
-            r = json.loads(run.stdout.strip().splitlines()[-1])
-            r["mode"] = mode
-            r["file_bytes"] = big.stat().st_size
-            r["decoded_bytes"] = r["n_samples"] * 8
-            r["ratio"] = (r["peak"] - r["base"]) / r["decoded_bytes"]
-            out.append(r)
-    return out
+        return [read_in_child(small, big, mode) for mode in ("library", "cli")]
 
 
 def main(argv: list[str] | None = None) -> int:

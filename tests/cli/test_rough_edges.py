@@ -64,7 +64,7 @@ def test_demo_help_is_whole_and_states_the_range(capsys):
     # the description is the module docstring's paragraph, to its last word
     assert "point a copy at your own runs, and run rigtools run on it." in text
     assert "options:" in text and "Generates an FZG-C options:" not in text
-    assert "length of each run in seconds, 1.5 to 60 (default by size)" in text
+    assert "length of each FZG-C run in seconds, 1.5 to 60 (default by size)" in text
 
 
 def test_demo_output_that_cannot_be_a_folder(tmp_path, capsys):
@@ -201,10 +201,17 @@ def test_observe_summary_skips_rows_without_a_fitted_frequency():
 
 
 def test_demo_generation_counts_its_runs_in_the_log(tmp_path, capsys, monkeypatch):
-    """Without a terminal, one line per generated run, counted 1..n (the pipeline stubbed)."""
+    """Without a terminal, one line per generated run, counted 1..n (the pipeline stubbed).
+
+    The reduced demo: 8 FZG-C runs and the run-up; with ``--no-runup`` the 8 runs alone.
+    """
     import rigtools.cli.demo as demo_cli
 
     monkeypatch.setattr(demo_cli, "run_pipeline", lambda *a, **k: 0)
     assert main(["demo", "-o", str(tmp_path / "d"), "--size", "ci", "--duration", "1.5"]) == 0
+    lines = [ln for ln in capsys.readouterr().err.splitlines() if "generate [" in ln]
+    assert [ln.split("[")[1].split("]")[0] for ln in lines] == [f"{i}/9" for i in range(1, 10)]
+    assert main(["demo", "-o", str(tmp_path / "e"), "--size", "ci", "--duration", "1.5",
+                 "--no-runup"]) == 0
     lines = [ln for ln in capsys.readouterr().err.splitlines() if "generate [" in ln]
     assert [ln.split("[")[1].split("]")[0] for ln in lines] == [f"{i}/8" for i in range(1, 9)]

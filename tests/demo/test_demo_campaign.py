@@ -62,8 +62,11 @@ def test_campaign_file_lists_every_run_with_its_conditions(demo) -> None:
     assert camp.sensors.dbc is None and camp.sensors.mapping is None
     assert camp.sensors.accel == ACCEL_CHANNELS
     assert camp.thermal.reference_temperature_C == demo.truth.physics.reference_temperature_C
-    assert [r.id for r in camp.runs] == [c.run_id for c in demo_conditions("ci")]
+    assert [r.id for r in camp.runs] == [c.run_id for c in demo_conditions("ci")] + [
+        demo.runup.run_id]
     for run in camp.runs:
+        if run.id == demo.runup.run_id:     # the run-up: its truth is truth.json["runup"]
+            continue
         t = demo.truth.run(run.id)
         assert run.file.is_file(), run.file
         assert run.file.resolve() == demo.run_files[run.id].resolve()
@@ -261,7 +264,7 @@ def test_same_seed_same_files_other_seed_other_recordings(tmp_path: Path) -> Non
     ca, cb, cc = (_contents(x.campaign_path.parent) for x in (a, b, c))
     assert ca == cb
     runs = [k for k in ca if k.startswith("runs/")]
-    assert len(runs) == len(a.runs)
+    assert len(runs) == len(a.runs) + 1    # and the run-up
     assert all(ca[k] != cc[k] for k in runs)
     ta, tc = (json.loads(x.truth_path.read_text(encoding="utf-8")) for x in (a, c))
     assert ta["parameters"] == tc["parameters"] and ta["derived"] == tc["derived"]

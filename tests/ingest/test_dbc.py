@@ -1,12 +1,13 @@
 """Vectorised DBC decoding against cantools and against a bit-by-bit reference."""
 
+import cantools
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rigtools.errors import DbcError
-from rigtools.ingest.can.dbc import decode_signal, load_dbc, raw_signal
+from rigtools.ingest.can.dbc import decode_signal, load_dbc, raw_signal, signal_raw
 from rigtools.schemas import schema_path
 
 
@@ -77,3 +78,29 @@ def test_dbc_that_does_not_parse_names_file_and_line(tmp_path):
 def test_missing_dbc_is_a_clear_error(tmp_path):
     with pytest.raises(DbcError, match="no such file"):
         load_dbc(tmp_path / "nope.dbc")
+
+
+@pytest.mark.parametrize("byte_order", ["little_endian", "big_endian"])
+@pytest.mark.parametrize("signed", [False, True])
+@pytest.mark.parametrize("length", [8, 16, 32, 64])
+def test_byte_aligned_signals_read_as_their_bytes(byte_order: str, signed: bool,
+                                                  length: int) -> None:
+    """Whole-byte signals (read as a view of their bytes) against the bit-by-bit reference.
+
+    Every byte position the signal fits at, both byte orders, signed and unsigned: the raw
+    values and their dtype are those of the general shift-and-mask path.
+    """
+    rng = np.random.default_rng(length)
+    data = rng.integers(0, 256, (64, 8), dtype=np.uint8)
+    data[0] = 0xFF  # all ones: the most negative and the largest values
+    data[1] = 0x80
+    nb = length // 8
+    for first in range(0, 9 - nb):
+        start = 8 * first if byte_order == "little_endian" else 8 * first + 7
+        sig = cantools.database.can.Signal("S", start, length, byte_order, signed)
+        raw, _ = signal_raw(data, sig)
+        want = [_bits_reference(bytes(row), start, length, byte_order) for row in data]
+        if signed:
+            want = [v - (1 << length) if v >> (length - 1) else v for v in want]
+        assert raw.tolist() == want, (first, byte_order)
+        assert raw.dtype == np.dtype(f"{'i' if signed else 'u'}{nb}")

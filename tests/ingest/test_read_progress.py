@@ -41,7 +41,12 @@ def files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
                                      rng=2)
     out["blf"] = write_can_log(d / "run.blf", frames, "blf")
     out["log"] = write_can_log(d / "run.log", frames, "log")
-    with open(out["log"], "rb") as src, gzip.open(d / "run.log.gz", "wb") as dst:
+    # the gzip log ten times as long: its read must outlast many polls of the progress thread
+    # (a fast reader finishes a short file between two of them on a busy machine)
+    long_can = [np.round(rng.normal(0, 100, 30 * 4000)) * 0.015 for _ in range(4)]
+    long_log = write_can_log(d / "long.log", encode_reference_frames(
+        long_can, {"Torque_Nm": 302.0, "PinionSpeed_rpm": 1500.0}, rng=2), "log")
+    with open(long_log, "rb") as src, gzip.open(d / "run.log.gz", "wb") as dst:
         shutil.copyfileobj(src, dst)
     out["gz"] = d / "run.log.gz"
     out["parquet"] = write_parquet(read(out["mcap"]), d / "run.parquet")

@@ -38,9 +38,9 @@ ACCEL = ("accel_x", "accel_y")
 
 @pytest.fixture(scope="session")
 def demo_source(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A demo campaign of 1-s runs, generated once per session (do not modify it)."""
+    """A demo campaign of 1-s runs, without the run-up, made once per session (do not modify)."""
     out = tmp_path_factory.mktemp("demo")
-    generate_demo_campaign(out, size="ci", seed=3, duration_s=1.0)
+    generate_demo_campaign(out, size="ci", seed=3, duration_s=1.0, runup=False)
     return out
 
 

@@ -102,7 +102,8 @@ def test_rerun_reuses_everything_and_a_changed_recording_is_redone_alone(
         without_volatile_report_fields(report_before)
 
     # another recording of the same run (another seed of the demo): only that run is redone
-    other = generate_demo_campaign(tmp_path / "other", size="ci", seed=4, duration_s=1.0)
+    other = generate_demo_campaign(tmp_path / "other", size="ci", seed=4, duration_s=1.0,
+                                   runup=False)
     changed = "LS9-30C"
     shutil.copyfile(other.run_files[changed], camp.parent / "runs" / "ls9_30c.mcap")
     third = run_campaign(camp, out, stages=UP_TO_CALIBRATION, progress=False)

@@ -139,7 +139,7 @@ def _pipeline_json(campaign: Campaign, campaign_path: Path, runs: list[dict[str,
 
 def build_outdir(base: Path) -> Path:
     """Write a demo OUTDIR of three runs under ``base`` and return its path (``base/out``)."""
-    demo = generate_demo_campaign(base / "campaign", size="ci")
+    demo = generate_demo_campaign(base / "campaign", size="ci", runup=False)
     full = load_campaign(demo.campaign_path)
     camp = dataclasses.replace(full, runs=tuple(r for r in full.runs if r.id in KEEP),
                                calibration=dict(CALIBRATION))

@@ -48,6 +48,7 @@ from typing import BinaryIO, Final
 
 import can
 
+from rigtools.ingest.can.asc_lines import FrameLines, parse_frame_lines
 from rigtools.ingest.can.frames import CanFrameBatch
 from rigtools.ingest.can.reader import CanLogReader
 from rigtools.ingest.can.textlog import EVENT, OK, TextLogDialect, head_lines, read_text_log
@@ -147,6 +148,8 @@ class _AscDialect(TextLogDialect):
         self.bad_date: tuple[int | None, str, BaseException] | None = None
         #: ``(line number, fraction)`` of the date in force when its milliseconds are ambiguous.
         self.short_fraction: tuple[int | None, str] | None = None
+        #: python-can is past the header: lines :meth:`frame_lines` parses skip it.
+        self.body = False
 
     def sniff(self, head: bytes) -> bool:
         return sniff(head)
@@ -201,6 +204,9 @@ class _AscDialect(TextLogDialect):
                 self._check_trigger(number, text)
                 yield number, text
             break
+        # python-can has read the header (and the first line after it): from here on the
+        # lines frame_lines parses are read without it
+        self.body = True
         for number, text in lines:
             self._check_trigger(number, text)
             yield number, text
@@ -231,6 +237,15 @@ class _AscDialect(TextLogDialect):
         if self.trigger is not None:
             out.append(self.trigger)
         return out
+
+    def frame_lines(self, block: bytes) -> FrameLines | None:
+        return parse_frame_lines(block)
+
+    def fast_start_s(self) -> float | None:
+        reader = self.reader
+        if not self.body or reader is None or getattr(reader, "base", None) != "hex":
+            return None
+        return float(reader.start_time)
 
     def payload_short(self, msg: can.Message) -> bool:
         # python-can: FD frames carry `dlc` = data length; classic ones min(8, dlc) bytes.

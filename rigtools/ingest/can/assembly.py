@@ -21,7 +21,7 @@ RecordingBuilder.note_carrier`), so the gaps its channels share are counted once
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -111,11 +111,17 @@ def assemble_can(
                 bus_rows = rows if len(buses) == 1 else rows[bus_of_rows == bus]
                 data = batch.data[bus_rows]
                 stamps = batch.timestamp_s[bus_rows]
-                for ui in uniform_by_key.get(key, ()):
+                uniform = uniform_by_key.get(key, ())
+                if uniform:
+                    # one copy of the stamps and of each counter for the message's channels
+                    base = float(stamps[0])
+                    stamp_part = (base, (stamps - base).astype(np.float32))
+                    counters: dict[tuple[object, ...], np.ndarray] = {}
+                for ui in uniform:
                     acc = accs.get((ui, bus))
                     if acc is None:
                         acc = accs[(ui, bus)] = _UniformAcc(layout.uniform[ui])
-                    _decode_uniform(acc, data, stamps)
+                    _decode_uniform(acc, data, stamp_part, counters)
                 for si in slow_by_key.get(key, ()):
                     s = layout.slow[si]
                     vals = decode_signal(data, s.signal)
@@ -167,10 +173,11 @@ def _finish_messages(
                f"{source} (channels {', '.join(map(repr, names))})")
         duplicate: np.ndarray | None = None
         outlier: np.ndarray | None = None
+        shared = _shared_timeline([accs[m] for m in members], who, report)
         for m, name in zip(members, names, strict=True):
             acc = accs[m]
             builder.note_carrier(name, source, len(acc.spec.samples))
-            dup, out = _finish_uniform(acc, name, who, builder, report)
+            dup, out = _finish_uniform(acc, name, who, builder, report, shared)
             duplicate = _either(duplicate, dup)
             outlier = _either(outlier, out)
         n_dup = 0 if duplicate is None else int(np.count_nonzero(duplicate))
@@ -227,8 +234,15 @@ def _bus_name(name: str, bus: int, buses: set[int], report: IngestReport) -> str
 
 
 def _decode_uniform(
-    acc: _UniformAcc, data: np.ndarray, stamps: np.ndarray
+    acc: _UniformAcc, data: np.ndarray, stamp_part: tuple[float, np.ndarray],
+    counters: dict[tuple[object, ...], np.ndarray],
 ) -> None:
+    """Decode one channel's samples from the frames ``data`` of its message.
+
+    ``stamp_part`` is the frames' stamps as (base, float32 offsets) and ``counters`` the
+    counters decoded so far from these frames, by signal layout: both shared by the channels
+    of the message (the arrays are never written to).
+    """
     u = acc.spec
     raws, convs = zip(*(signal_raw(data, s) for s in u.samples), strict=True)
     if len(set(convs)) == 1 and len({r.dtype for r in raws}) == 1:
@@ -243,10 +257,15 @@ def _decode_uniform(
     if not acc.raws:
         acc.conversion = conv
     acc.raws.append(raw)
-    base = float(stamps[0])
-    acc.stamps.append((base, (stamps - base).astype(np.float32)))
+    acc.stamps.append(stamp_part)
     if u.counter is not None:
-        acc.counters.append(signal_raw(data, u.counter)[0])
+        c = u.counter
+        layout = (int(c.start), int(c.length), str(c.byte_order), bool(c.is_signed),
+                  bool(c.is_float))
+        got = counters.get(layout)
+        if got is None:
+            got = counters[layout] = signal_raw(data, c)[0]
+        acc.counters.append(got)
 
 
 #: Odd 64-bit multipliers for :func:`_fingerprints` (one per payload byte, cycled).
@@ -273,35 +292,62 @@ def _fingerprints(raws: list[np.ndarray]) -> np.ndarray:
     return out
 
 
-def _finish_uniform(
-    acc: _UniformAcc, name: str, who: str, builder: RecordingBuilder, report: IngestReport
-) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """Hand one channel's frames to the builder, placed by their counter.
+@dataclass(frozen=True)
+class _Timeline:
+    """Where the frames of a channel go, in arrival order.
 
-    ``who`` names the channel, or its message and channels when the message feeds several, in
-    the warnings. Returns the masks, over the channel's frames in arrival order, of the frames
-    dropped as duplicates and as corrupted counters (None when none is).
+    Shared by the channels of one message read through the same counter (they received the
+    same frames). ``ticks`` and ``keep`` per frame; ``restarts`` positions of counter restarts;
+    ``duplicate`` and ``outlier`` masks of the frames dropped (None when none is);
+    ``clock_index`` and ``clock_stamps`` the sample index and logger stamp of the frames the
+    clock check uses.
     """
-    u = acc.spec
-    duplicate: np.ndarray | None = None
-    outlier: np.ndarray | None = None
-    if not acc.raws:
-        return duplicate, outlier
-    k = len(u.samples)
-    fs = u.spec.sample_rate_Hz
-    frame_rate = fs / k
+
+    ticks: np.ndarray
+    keep: np.ndarray
+    restarts: np.ndarray
+    duplicate: np.ndarray | None
+    outlier: np.ndarray | None
+    clock_index: np.ndarray
+    clock_stamps: np.ndarray
+
+
+class _PayloadNeededError(Exception):
+    """The counter of a shared timeline needs the payloads (a replay to tell from a restart)."""
+
+
+def _payload_needed() -> np.ndarray:
+    raise _PayloadNeededError
+
+
+def _joined_stamps(acc: _UniformAcc) -> np.ndarray:
     stamps = np.empty(sum(r.size for _, r in acc.stamps))
     row = 0
     for base, rel in acc.stamps:
         np.add(rel, base, out=stamps[row : row + rel.size], dtype=np.float64)
         row += rel.size
-    acc.stamps.clear()
+    return stamps
+
+
+def _timeline(acc: _UniformAcc, who: str, report: IngestReport,
+              payload: Callable[[], np.ndarray]) -> _Timeline:
+    """The placement of one channel's frames by their counter (or their stamps).
+
+    ``payload`` makes the frames' fingerprints when the counter needs them; it may raise
+    :class:`_PayloadNeededError`, before anything is reported or released.
+    """
+    u = acc.spec
+    k = len(u.samples)
+    frame_rate = u.spec.sample_rate_Hz / k
+    stamps = _joined_stamps(acc)
+    duplicate: np.ndarray | None = None
+    outlier: np.ndarray | None = None
+    restarts = np.zeros(0, np.int64)
     if u.counter is not None:
         # Raw counter bits (a DBC scale on a counter is ignored: it counts frames).
         counters = np.concatenate(acc.counters).astype(np.int64)
-        acc.counters.clear()
         un = unwrap_counter(counters, 1 << int(u.counter.length), stamps, frame_rate,
-                            payload=_fingerprints(acc.raws))
+                            payload=payload)
         del counters
         if un.n_outlier:
             outlier = un.outlier
@@ -321,31 +367,86 @@ def _finish_uniform(
                 f"(first at frame {int(un.restarts[0])} of the channel); "
                 "resynchronised from the logger clock"
             )
-        ticks, keep = un.ticks, un.keep
-        for r in un.restarts:
-            builder.mark_restart(name, int(ticks[r]) * k)
+        ticks, keep, restarts = un.ticks, un.keep, un.restarts
     else:
         ticks = np.round((stamps - stamps.min()) * frame_rate).astype(np.int64)
         keep = np.ones(ticks.size, bool)
         report.warn(f"{who}: no sample counter; time base from logger stamps")
+    acc.stamps.clear()
+    acc.counters.clear()
     # The clock check needs only a sample of the stamps.
     pick = np.flatnonzero(keep)
     if pick.size > MAX_CLOCK_POINTS:
         pick = pick[np.linspace(0, pick.size - 1, MAX_CLOCK_POINTS).astype(np.int64)]
-    clock_index, clock_stamps = ticks[pick] * k + (k - 1), stamps[pick]
-    del stamps, pick
+    return _Timeline(ticks, keep, restarts, duplicate, outlier, ticks[pick] * k + (k - 1),
+                     stamps[pick])
+
+
+def _counter_signature(acc: _UniformAcc) -> tuple[object, ...] | None:
+    c = acc.spec.counter
+    if c is None:
+        return None
+    return (int(c.start), int(c.length), str(c.byte_order), len(acc.spec.samples),
+            float(acc.spec.spec.sample_rate_Hz), sum(r.size for _, r in acc.stamps))
+
+
+def _shared_timeline(group: list[_UniformAcc], who: str,
+                     report: IngestReport) -> _Timeline | None:
+    """One timeline for channels of one message read through the same counter, or None.
+
+    Those channels received the same frames in the same order, with the same counters and
+    stamps: the counter is unwrapped once. Only when it needs the payloads (a replayed run to
+    tell from a restart, which the fingerprints of each channel's own samples decide) is
+    each channel unwrapped on its own, as it would be alone.
+    """
+    if len(group) < 2 or not group[0].raws:
+        return None
+    sig = _counter_signature(group[0])
+    if sig is None or any(_counter_signature(a) != sig for a in group[1:]):
+        return None
+    try:
+        shared = _timeline(group[0], who, report, _payload_needed)
+    except _PayloadNeededError:
+        return None
+    for acc in group[1:]:
+        acc.stamps.clear()
+        acc.counters.clear()
+    return shared
+
+
+def _finish_uniform(
+    acc: _UniformAcc, name: str, who: str, builder: RecordingBuilder, report: IngestReport,
+    shared: _Timeline | None = None,
+) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Hand one channel's frames to the builder, placed by their counter.
+
+    ``who`` names the channel, or its message and channels when the message feeds several, in
+    the warnings; ``shared`` is the timeline of the channel's message when it was made once
+    for all its channels. Returns the masks, over the channel's frames in arrival order, of
+    the frames dropped as duplicates and as corrupted counters (None when none is).
+    """
+    if not acc.raws:
+        return None, None
+    tl = shared
+    if tl is None:
+        tl = _timeline(acc, who, report, lambda: _fingerprints(acc.raws))
+    u = acc.spec
+    k = len(u.samples)
+    fs = u.spec.sample_rate_Hz
+    for r in tl.restarts:
+        builder.mark_restart(name, int(tl.ticks[r]) * k)
     row = 0
     raws = acc.raws
     for i in range(len(raws)):
         raw = raws[i]
         raws[i] = None  # type: ignore[call-overload]  # release as we go
         m = raw.shape[0]
-        sel = keep[row : row + m]
-        t = ticks[row : row + m]
+        sel = tl.keep[row : row + m]
+        t = tl.ticks[row : row + m]
         row += m
         if not sel.all():
             raw, t = raw[sel], t[sel]
         builder.add_samples(name, u.unit, fs, t * k, raw, conversion=acc.conversion)
     raws.clear()
-    builder.add_clock(name, clock_index, clock_stamps)
-    return duplicate, outlier
+    builder.add_clock(name, tl.clock_index, tl.clock_stamps)
+    return tl.duplicate, tl.outlier

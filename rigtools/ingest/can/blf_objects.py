@@ -37,7 +37,6 @@ __all__ = [
 OBJ_BASE = struct.Struct("<4sHHLL")
 #: Signature at the start of every log object.
 LOBJ = b"LOBJ"
-_LOBJ_U32 = int.from_bytes(LOBJ, "little")
 
 _CAN_MESSAGE = 1
 _CAN_ERROR = 2
@@ -51,11 +50,6 @@ _CAN_FD_ERROR_64 = 104
 _ERROR_TYPES = frozenset({_CAN_ERROR, _CAN_ERROR_EXT, _CAN_FD_ERROR_64})
 _FRAME_TYPES = frozenset({_CAN_MESSAGE, _CAN_MESSAGE2, _CAN_FD_MESSAGE, _CAN_FD_MESSAGE_64})
 
-_BASE_DT = np.dtype(
-    {"names": ["sig", "hs", "hv", "size", "type"],
-     "formats": ["<u4", "<u2", "<u2", "<u4", "<u4"],
-     "offsets": [0, 4, 6, 8, 12], "itemsize": 16}
-)
 # Bytes after the 16-byte base header that python-can unpacks as the object header proper.
 _HEADER_REST = {1: 16, 2: 24}
 
@@ -182,6 +176,8 @@ class ObjectParser:
         kinds: list[tuple[int, int, int, int]] = []
         pos = 0
         cooldown = 0
+        run_step = 16  # objects checked at once when a run starts
+        short_runs = 0  # short runs in a row: the object-by-object stretch after one doubles
         max_object = self.max_object
         while True:
             if self.resync:
@@ -239,24 +235,36 @@ class ObjectParser:
                 k = find(LOBJ, nxt, nxt + 8)
                 if k >= 0:
                     stride = k - j
-                    step = 16
+                    # the 16 header bytes every object of the run repeats
+                    head = np.frombuffer(buf, "V16", 1, j)[0]
+                    head_bytes = buf[j : j + 16]
+                    step = run_step
                     while True:
                         first = j + stride * count
-                        if first + osize > n:
-                            break
+                        if first + osize > n or buf[first : first + 16] != head_bytes:
+                            break  # (a lone object of its kind: no array for it)
                         m = min(step, (n - osize - first) // stride + 1)
-                        v = np.ndarray((m,), _BASE_DT, buffer=buf, offset=first,
+                        v = np.ndarray((m,), "V16", buffer=buf, offset=first,
                                        strides=(stride,))
-                        ok = ((v["sig"] == _LOBJ_U32) & (v["size"] == osize)
-                              & (v["type"] == otype) & (v["hv"] == hv) & (v["hs"] == hs))
+                        ok = v == head
                         if ok.all():
                             count += m
                             step = min(step * 4, 1 << 16)
                             continue
                         count += int(np.argmin(ok))
                         break
+                    # start the next run's check at about this run's length
+                    run_step = 16
+                    while run_step * 4 <= min(count, 1 << 16):
+                        run_step *= 4
                     if count < 4:
-                        cooldown = 32
+                        # Objects of mixed types: walk a few one by one before looking for a
+                        # run again (more after each short run, up to 32). A lone object of
+                        # another type (an error frame) costs one short run, not 32 objects.
+                        short_runs += 1
+                        cooldown = min(32, (1 << short_runs) - 1)
+                    else:
+                        short_runs = 0
                     last_end = j + stride * (count - 1) + osize
                     if count > 1 and last_end + 8 <= n and find(LOBJ, last_end, last_end + 8) < 0:
                         # The run's last header is sound but the object does not end where
@@ -441,20 +449,24 @@ class ObjectParser:
                             "8 data bytes")
             data = rec["data"]
         keep = None
+        raw_id, ch, flags, ts = rec["id"], rec["ch"], rec["flags"], rec["ts"]
         if bad.any():
             keep = np.flatnonzero(~bad)
             if keep.size == 0:
                 return None
-            rec, data, length, is_fd = rec[keep], data[keep], length[keep], is_fd[keep]
+            # fields one by one: indexing the strided records would copy every field
+            raw_id, ch, flags, ts = raw_id[keep], ch[keep], flags[keep], ts[keep]
+            data, length, is_fd = data[keep], length[keep], is_fd[keep]
         if length.size and data.shape[1] == 64 and int(length.max()) <= 8:
             data = data[:, :8]
         width = data.shape[1]
-        if bool((length == width).all()):
-            data = np.ascontiguousarray(data)
-        else:
-            data = np.where(np.arange(width) < length[:, None], data, 0).astype(np.uint8)
-        raw_id = rec["id"]
-        channel = rec["ch"].astype(np.int32) - 1
+        data = np.ascontiguousarray(data)
+        short = np.flatnonzero(length < width)
+        if short.size:
+            if data.base is not None or not data.flags.writeable:
+                data = data.copy()
+            data[short] *= np.arange(width) < length[short, None]
+        channel = ch.astype(np.int32) - 1
         wide = channel > 32767
         if wide.any():
             if not self.warned_channel:
@@ -462,7 +474,7 @@ class ObjectParser:
                 report.warn(f"{self.path}: BLF channel numbers above 32768 set to -1")
             channel[wide] = -1
         cols = (
-            self._timestamps(rec["flags"], rec["ts"]),
+            self._timestamps(flags, ts),
             (raw_id & 0x1FFFFFFF).astype(np.uint32),
             (raw_id & 0x80000000) != 0,
             np.ascontiguousarray(is_fd),

@@ -158,7 +158,8 @@ def _slow_line(text: str) -> tuple | None:
         return None
 
 
-def _parse_block(block: bytes, first_line: int) -> tuple[_Rows, np.ndarray]:
+def _parse_block(block: bytes, first_line: int, dominant: bool = True) -> tuple[_Rows,
+                                                                              np.ndarray]:
     r"""Parse a block of whole lines.
 
     Parameters
@@ -167,6 +168,9 @@ def _parse_block(block: bytes, first_line: int) -> tuple[_Rows, np.ndarray]:
         Whole lines, each ending with ``\\n``.
     first_line : int
         1-based line number of the first line.
+    dominant : bool
+        Parse the lines of the most common length as one matrix when they are most of the
+        block (:func:`_parse_dominant`); the rest go the general way.
 
     Returns
     -------
@@ -200,6 +204,12 @@ def _parse_block(block: bytes, first_line: int) -> tuple[_Rows, np.ndarray]:
                 if back is None:
                     return rows, line_no
                 rows.kind[back] = _BAD  # re-parsed below with every other line
+    if dominant and n >= _DOMINANT_MIN_LINES:
+        todo = _parse_dominant(block, a, starts, nl, rows, chan_cache)
+        if todo is not None:
+            if todo.size:
+                _parse_subset(block, starts, nl, todo, rows, chan_cache)
+            return rows, line_no
     big = len(block) + 1
     length = ends - starts
     rows.kind[length == 0] = _BLANK
@@ -285,6 +295,69 @@ def _parse_block(block: bytes, first_line: int) -> tuple[_Rows, np.ndarray]:
     return rows, line_no
 
 
+#: Blocks with fewer lines go the general way only.
+_DOMINANT_MIN_LINES = 64
+
+
+def _parse_dominant(block: bytes, a: np.ndarray, starts: np.ndarray, nl: np.ndarray,
+                    rows: _Rows, chan_cache: dict[bytes, int]) -> np.ndarray | None:
+    """Parse the lines of the most common length that have the layout of the first of them.
+
+    A log mixes a few layouts (a slow message with fewer bytes, error and remote frames)
+    among one that makes most of its lines: those are gathered into one character matrix
+    and parsed together, without locating the structural characters of every line.
+
+    Returns the indices of the lines left to parse (None, and nothing parsed, when the most
+    common length is not that of most lines or its first line has no plain layout).
+    """
+    n = nl.size
+    with_cr = nl - starts  # line lengths without the line feed
+    counts = np.bincount(np.minimum(with_cr, 1024))
+    width = int(np.argmax(counts))
+    if 2 * int(counts[width]) < n or width == 0 or width >= 1024:
+        return None
+    idx = np.flatnonzero(with_cr == width)
+    s0 = int(starts[idx[0]])
+    line = block[s0 : s0 + width]
+    cr = int(line.endswith(b"\r"))
+    k = _layout_key(line[:-1] if cr else line)
+    if k is None or _columns(k)[-1] != width - cr:
+        return None
+    m = sliding_window_view(a, width)[starts[idx]]
+    ok = _uniform_rows(m, k)
+    if cr:
+        ok &= m[:, width - 1] == 13
+    done = np.zeros(n, bool)
+    if bool(ok.all()):
+        sel = idx
+    else:
+        sel, m = idx[ok], m[ok]
+    back = _parse_group(m[:, : width - cr], k, sel, rows, chan_cache)
+    done[sel] = True
+    if back is not None:
+        done[back] = False
+        rows.kind[back] = _BAD
+    return np.flatnonzero(~done)
+
+
+def _parse_subset(block: bytes, starts: np.ndarray, nl: np.ndarray, todo: np.ndarray,
+                  rows: _Rows, chan_cache: dict[bytes, int]) -> None:
+    """Parse the lines ``todo`` of a block the general way, into ``rows``."""
+    sub_block = b"".join([block[s : e + 1] for s, e in zip(starts[todo].tolist(),
+                                                           nl[todo].tolist(), strict=True)])
+    sub, _ = _parse_block(sub_block, 1, dominant=False)
+    rows.kind[todo] = sub.kind
+    rows.ts[todo] = sub.ts
+    rows.can_id[todo] = sub.can_id
+    rows.ext[todo] = sub.ext
+    rows.fd[todo] = sub.fd
+    rows.length[todo] = sub.length
+    rows.channel[todo] = sub.channel
+    if sub.data.shape[1] > rows.data.shape[1]:
+        rows.widen()
+    rows.data[todo, : sub.data.shape[1]] = sub.data
+
+
 def _columns(k: int) -> tuple[int, ...]:
     """Unpack a layout key: field lengths and flags, and the columns of the fields."""
     il, fl, cl = k & 15, (k >> 4) & 15, (k >> 8) & 31
@@ -314,6 +387,28 @@ def _layout_key(line: bytes) -> int | None:
         return None
     return (il | (fl << 4) | (cl << 8) | (idl << 13) | (int(fdk) << 17) | (int(remote) << 18)
             | (dl << 19) | (int(suffix) << 27))
+
+
+def _uniform_rows(m: np.ndarray, k: int) -> np.ndarray:
+    """Rows of a character matrix that have the structural characters of layout ``k``.
+
+    The matrix is at least as wide as the layout; the rows' other characters are not looked at.
+    """
+    il, fl, cl, idl, fdk, remote, _, suffix, c_chan, c_id, c_data, width = _columns(k)
+    cols = [(0, b"("), (1 + il, b"."), (2 + il + fl, b")"), (3 + il + fl, b" "),
+            (c_chan + cl, b" "), (c_id + idl, b"#")]
+    if fdk:
+        cols.append((c_id + idl + 1, b"#"))
+    if suffix:
+        cols.append((width - 2, b" "))
+    ok = m[:, cols[0][0]] == cols[0][1][0]
+    for c, ch in cols[1:]:
+        ok &= m[:, c] == ch[0]
+    if remote:
+        ok &= (m[:, c_data] | 0x20) == ord("r")
+    if suffix:
+        ok &= ((m[:, width - 1] | 0x20) == ord("r")) | ((m[:, width - 1] | 0x20) == ord("t"))
+    return ok
 
 
 def _uniform_ok(m: np.ndarray, k: int) -> bool:
@@ -488,7 +583,7 @@ def iter_batches(
     line = 1
     content = False
     for block in _blocks(stream, block_bytes):
-        content = content or bool(block.strip())
+        content = content or not block.isspace()  # (no copy of the block, as strip makes)
         rows, line_no = _parse_block(block, line)
         line += line_no.size
         for kind, reason in ((_ERROR, "error_frame"), (_REMOTE, "remote_frame"),

@@ -8,6 +8,7 @@ length up to 64, signed, IEEE float, multiplexed).
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import re
 from pathlib import Path
@@ -52,6 +53,18 @@ def load_dbc(path: str | Path, *, strict: bool = True) -> Any:
     p = Path(path)
     if not p.is_file():
         raise DbcError(p, None, "a DBC file", "a directory" if p.is_dir() else "no such file")
+    st = p.stat()
+    return _load_dbc(str(p.resolve()), st.st_mtime_ns, st.st_size, bool(strict))
+
+
+@functools.lru_cache(maxsize=8)
+def _load_dbc(path: str, mtime_ns: int, size: int, strict: bool) -> Any:
+    """The DBC parsed once per file version (a campaign reads hundreds of logs with one DBC).
+
+    ``mtime_ns`` and ``size`` are part of the key so that an edited file is parsed again.
+    The database is only read, never changed, by rigtools.
+    """
+    p = Path(path)
     try:
         return cantools.database.load_file(str(p), database_format="dbc", strict=strict)
     except Exception as exc:  # cantools raises ParseError, ValueError, KeyError, ...
@@ -111,6 +124,32 @@ def raw_signal(data: np.ndarray, start: int, length: int, byte_order: str) -> np
     return (acc >> np.uint64(shift)) & mask
 
 
+def _aligned_field(data: np.ndarray, start: int, length: int, byte_order: str,
+                   signed: bool, is_float: bool) -> np.ndarray | None:
+    """An integer signal filling whole bytes, read as its bytes are, or None.
+
+    8, 16, 32 or 64 bits on a byte boundary (either byte order): one copy of the bytes
+    viewed as the integer, in the dtype :func:`signal_raw` gives. None for any other
+    signal (and for float signals, whose bits go the general way).
+    """
+    if length not in (8, 16, 32, 64) or data.ndim != 2 or is_float:
+        return None
+    if byte_order == "little_endian":
+        if start % 8:
+            return None
+        first, order = start // 8, "<"
+    else:
+        if start % 8 != 7:
+            return None
+        first, order = start // 8, ">"
+    nb = length // 8
+    if first + nb > data.shape[1]:
+        return None
+    kind = "i" if signed else "u"
+    field = np.ascontiguousarray(data[:, first : first + nb]).view(f"{order}{kind}{nb}")[:, 0]
+    return field.astype(f"={kind}{nb}")
+
+
 def signal_raw(data: np.ndarray, signal: Any) -> tuple[np.ndarray, tuple[float, float]]:
     """Raw values of a signal in the smallest exact dtype, and its ``(scale, offset)``.
 
@@ -119,8 +158,12 @@ def signal_raw(data: np.ndarray, signal: Any) -> tuple[np.ndarray, tuple[float, 
     float64. ``decode_signal`` is ``raw.astype(float64) * scale + offset``.
     """
     length = int(signal.length)
-    raw = raw_signal(data, int(signal.start), length, signal.byte_order)
     conv = (float(signal.scale), float(signal.offset))
+    aligned = _aligned_field(data, int(signal.start), length, signal.byte_order,
+                             bool(signal.is_signed), bool(signal.is_float))
+    if aligned is not None:
+        return aligned, conv
+    raw = raw_signal(data, int(signal.start), length, signal.byte_order)
     if signal.is_float:
         if length == 32:
             return raw.astype(np.uint32).view(np.float32), conv

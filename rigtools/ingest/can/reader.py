@@ -46,7 +46,7 @@ class CanLogReader(StreamReader):
     """
 
     units = "frames"
-    # Parsing a log keeps one core busy: the SHA-256 of the file runs beside it.
+    # A log is read in order: its bytes are hashed as they are read.
     hash_while_decoding = True
 
     def __init__(self, name: str, sniff: Callable[[bytes], bool],

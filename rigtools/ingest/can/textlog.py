@@ -15,19 +15,23 @@ import re
 import zlib
 from collections import deque
 from collections.abc import Iterable, Iterator
-from typing import Any, BinaryIO, Final
+from typing import Any, BinaryIO, Final, TypeAlias
 
 import can
+import numpy as np
 
 from rigtools.errors import RecordingFormatError
-from rigtools.ingest.can.frames import CanFrameBatch, from_messages
+from rigtools.ingest.can.asc_lines import FrameLines
+from rigtools.ingest.can.frames import CanFrameBatch, concat, from_messages
 from rigtools.ingest.recording import IngestReport
 
-__all__ = ["EVENT", "OK", "TextLogDialect", "head_lines", "read_text_log"]
+__all__ = ["EVENT", "OK", "FastRuns", "TextLogDialect", "head_lines", "read_text_log"]
 
 _HEAD_BYTES: Final[int] = 8192
 #: Bytes read from the stream at a time (at most).
 _BLOCK_BYTES: Final[int] = 1 << 16
+#: Bytes read at a time for a dialect with a vectorised line parser.
+_FAST_BLOCK_BYTES: Final[int] = 1 << 20
 #: python-can errors tolerated before its first message; past that the file is refused.
 _MAX_ERRORS_BEFORE_DATA: Final[int] = 20
 #: Consecutive python-can errors after which the rest of the file is counted, not parsed.
@@ -40,6 +44,10 @@ _MAX_STD_ID: Final[int] = 0x7FF
 #: missing columns, an unsupported dialect).
 _PARSE_ERRORS: Final = (ValueError, IndexError, KeyError, TypeError, NotImplementedError,
                         OverflowError)
+
+#: Runs of lines of one block a dialect parsed itself: the block's parsed lines, the line
+#: number of its first line, and ``(lo, hi, start_s)`` of each run (python-can's time origin).
+FastRuns: TypeAlias = tuple[FrameLines, int, list[tuple[int, int, float]]]
 
 #: Line kind returned by :meth:`TextLogDialect.classify`: an expected header or comment line.
 OK: Final[str] = "ok"
@@ -107,6 +115,23 @@ class TextLogDialect:
         """True when a data frame carries fewer bytes than its DLC announces."""
         return len(msg.data) < min(8, int(msg.dlc))
 
+    def frame_lines(self, block: bytes) -> FrameLines | None:
+        """The lines of ``block`` parsed without python-can, or None (no such parser).
+
+        A dialect that has one returns, per line, whether it is a data frame python-can
+        would read exactly so, and its fields; those lines never reach python-can.
+        """
+        return None
+
+    def fast_start_s(self) -> float | None:
+        """python-can's time origin for the lines :meth:`frame_lines` parsed, or None.
+
+        Asked when such lines are due, after python-can has read every line before them
+        (its state is theirs). None: not now (python-can is still in the header, or the
+        file's dialect is one :meth:`frame_lines` does not read), the lines go to python-can.
+        """
+        return None
+
     def hint(self) -> str:
         """Extra explanation for the error raised when python-can reads nothing."""
         return ""
@@ -125,6 +150,14 @@ class _LineFeed:
 
     def __init__(self, stream: BinaryIO, dialect: TextLogDialect) -> None:
         self._stream = stream
+        self._dialect = dialect
+        #: The dialect parses lines itself (:meth:`TextLogDialect.frame_lines`).
+        self._fast = type(dialect).frame_lines is not TextLogDialect.frame_lines
+        #: Runs of lines the dialect parsed itself, in file order, for the engine:
+        #: ``(lines, first line number of the block, [(lo, hi, start_s), ...])``.
+        self.fast: list[FastRuns] = []
+        #: Set once the rest of the file is only counted: every line goes the slow way.
+        self.draining = False
         self._replay: deque[str] = deque()
         self.pending: list[tuple[int, str]] = []
         self.head = bytearray()
@@ -139,6 +172,17 @@ class _LineFeed:
     def _decoded(self) -> Iterator[tuple[int | None, str]]:
         number = 0
         for chunk in self._chunks():
+            frames: FrameLines | None = None
+            if self._fast and not self.draining:
+                body = chunk.replace(b"\r\n", b"\n").replace(b"\r", b"\n") if (
+                    b"\r" in chunk) else chunk
+                if not body.endswith(b"\n"):
+                    body += b"\n"
+                frames = self._dialect.frame_lines(body)
+            if frames is not None and bool(frames.plain.any()):
+                yield from self._mixed_lines(body, frames, number)
+                number += frames.plain.size
+                continue
             for text in self._chunk_lines(chunk, number + 1):
                 number += 1
                 self.n_lines = number
@@ -149,6 +193,63 @@ class _LineFeed:
                         self.first_line = item
                     yield item
 
+    def _mixed_lines(self, body: bytes, frames: FrameLines,
+                     number: int) -> Iterator[tuple[int | None, str]]:
+        """The lines of a block some of which the dialect parsed (``frames``).
+
+        A run of lines the dialect parsed becomes a batch in :attr:`fast` when it is reached
+        (python-can has then read every line before it); the other lines are handed out as
+        :meth:`_decoded` hands them. ``number`` is the line number before the block.
+        """
+        plain = frames.plain
+        ends = frames.line_end
+        starts = np.empty_like(ends)
+        starts[0] = 0
+        starts[1:] = ends[:-1] + 1
+        n = plain.size
+        i = 0
+        for j in [*np.flatnonzero(~plain).tolist(), n]:
+            if j > i:  # lines i..j-1 parsed by the dialect
+                start_s = None if self.draining else self._dialect.fast_start_s()
+                if start_s is not None:
+                    if self.fast and self.fast[-1][0] is frames:
+                        self.fast[-1][2].append((i, j, start_s))
+                    else:
+                        self.fast.append((frames, number + 1, [(i, j, start_s)]))
+                    self._seen(number + i + 1, self._text(body, starts, ends, i, number))
+                    if j - 1 > i:
+                        self._seen(number + j, self._text(body, starts, ends, j - 1, number))
+                    self.n_lines = number + j
+                else:
+                    for k in range(i, j):
+                        self.n_lines = number + k + 1
+                        item = (number + k + 1, self._text(body, starts, ends, k, number))
+                        self._seen(*item)
+                        yield item
+            if j == n:
+                break
+            self.n_lines = number + j + 1
+            text = self._text(body, starts, ends, j, number)
+            if text and not text.isspace():
+                item = (number + j + 1, text)
+                self._seen(*item)
+                yield item
+            i = j + 1
+
+    def _seen(self, number: int, text: str) -> None:
+        item = (number, text)
+        self.last_line = item
+        if self.first_line is None:
+            self.first_line = item
+
+    def _text(self, body: bytes, starts: np.ndarray, ends: np.ndarray, k: int,
+              number: int) -> str:
+        """Line ``k`` of a block decoded as :meth:`_chunk_lines` decodes it."""
+        text = self._decode(body[int(starts[k]) : int(ends[k])], number + k + 1)
+        if number + k == 0 and text.startswith("\ufeff"):
+            text = text[1:]
+        return text
+
     def _chunks(self) -> Iterator[bytes]:
         """Blocks of the stream that end with a line feed (the last one may not)."""
         tail = b""
@@ -156,7 +257,8 @@ class _LineFeed:
         # only the last piece, where read() would drop the whole block on the error
         read = getattr(self._stream, "read1", self._stream.read)
         try:
-            while block := read(_BLOCK_BYTES):
+            size = _FAST_BLOCK_BYTES if self._fast else _BLOCK_BYTES
+            while block := read(size):
                 if len(self.head) < _HEAD_BYTES:
                     self.head += block[: _HEAD_BYTES - len(self.head)]
                 data = tail + block
@@ -213,6 +315,7 @@ class _LineFeed:
 
     def rest(self) -> Iterator[tuple[int, str]]:
         """The real lines not yet handed out."""
+        self.draining = True
         for number, text in self._source:
             if number is not None:
                 yield number, text
@@ -284,8 +387,7 @@ def _run(
 ) -> Iterator[CanFrameBatch]:
     feed = _LineFeed(stream, dialect)
     acc = _Accounting(dialect, report)
-    messages: list[can.Message] = []
-    positions: list[int] = []
+    out = _Batcher(batch_frames)
     read_any = False
     errors_in_row = 0
     abandoned = False
@@ -294,8 +396,12 @@ def _run(
         try:
             msg = next(it)
         except StopIteration:
+            read_any = out.take(feed.fast) or read_any
             break
         except _PARSE_ERRORS as exc:
+            if out.take(feed.fast):  # frames the dialect parsed, before the failing line
+                read_any = True
+                errors_in_row = 0
             bad = feed.pending.pop() if feed.pending else None
             acc.settle(feed.pending)
             feed.pending.clear()
@@ -317,6 +423,7 @@ def _run(
             feed.replay(dialect.replay())
             it = iter(dialect.make_reader(feed))
             continue
+        out.take(feed.fast)
         read_any = True
         errors_in_row = 0
         pending = feed.pending
@@ -338,11 +445,8 @@ def _run(
             report.reject("unparsable_line", 1, where)
             acc.bad_id += 1
         else:
-            messages.append(msg)
-            positions.append(number)
-            if len(messages) >= batch_frames:
-                yield from_messages(messages, positions, "line")
-                messages, positions = [], []
+            out.message(msg, number)
+        yield from out.full()
     acc.settle(feed.pending)
     feed.pending.clear()
     if feed.first_line is None:
@@ -377,8 +481,90 @@ def _run(
                     f"({feed.read_error}); frames up to there are kept")
     acc.summarise(path, feed)
     dialect.finish(report, path, feed.last_line)
-    if messages:
-        yield from_messages(messages, positions, "line")
+    yield from out.rest()
+
+
+class _Batcher:
+    """Frames in file order, batched: python-can's messages and the dialect's own batches.
+
+    Yielded in batches of ``size`` frames (the last one smaller).
+    """
+
+    def __init__(self, size: int) -> None:
+        self.size = size
+        self.parts: list[CanFrameBatch] = []
+        #: Runs of lines taken after the last part, not made into a batch yet.
+        self.runs: list[FastRuns] = []
+        self.n = 0
+        self.messages: list[can.Message] = []
+        self.positions: list[int] = []
+
+    def message(self, msg: can.Message, line: int) -> None:
+        """One data frame python-can read at ``line``."""
+        self.messages.append(msg)
+        self.positions.append(line)
+
+    def take(self, fast: list[FastRuns]) -> bool:
+        """Move the dialect's runs of lines in (``fast`` is emptied); True when any came.
+
+        Runs of one block stay runs until a batch is made of them (one gather for the many
+        runs between the error and remote frames of a block).
+        """
+        if not fast:
+            return False
+        self._close_messages()
+        for lines, first_line, runs in fast:
+            last = self.runs[-1] if self.runs else None
+            if last is not None and last[0] is lines:
+                last[2].extend(runs)
+            else:
+                self.runs.append((lines, first_line, list(runs)))
+            self.n += sum(hi - lo for lo, hi, _ in runs)
+        fast.clear()
+        return True
+
+    def _close_runs(self) -> None:
+        for lines, first_line, runs in self.runs:
+            self.parts.append(lines.rows(runs, first_line))
+        self.runs = []
+
+    def _close_messages(self) -> None:
+        if self.messages:
+            self._close_runs()  # the runs came first
+            b = from_messages(self.messages, self.positions, "line")
+            self.parts.append(b)
+            self.n += len(b)
+            self.messages, self.positions = [], []
+
+    def full(self) -> Iterator[CanFrameBatch]:
+        """The whole batches gathered so far."""
+        if self.n + len(self.messages) < self.size:
+            return
+        if not self.parts and not self.runs:  # python-can's messages only
+            yield from_messages(self.messages, self.positions, "line")
+            self.messages, self.positions = [], []
+            return
+        yield from self._split(final=False)
+
+    def rest(self) -> Iterator[CanFrameBatch]:
+        """Everything left."""
+        yield from self._split(final=True)
+
+    def _split(self, final: bool) -> Iterator[CanFrameBatch]:
+        self._close_runs()
+        self._close_messages()
+        if not self.parts:
+            return
+        whole = self.parts[0] if len(self.parts) == 1 else concat(self.parts)
+        self.parts, self.n = [], 0
+        size = self.size
+        for lo in range(0, len(whole), size):
+            hi = min(lo + size, len(whole))
+            piece = whole if (lo, hi) == (0, len(whole)) else whole.take(np.arange(lo, hi))
+            if hi - lo < size and not final:
+                self.parts, self.n = [piece], len(piece)
+                return
+            yield piece
 
 
 class _Accounting:

@@ -1,0 +1,226 @@
+r"""From SDOF parameters to modelled Arms along each run-up's mesh-frequency path.
+
+For one SDOF model (``fvms``, ``vvms`` or ``lste``) and each run-up curve
+(:class:`~rigtools.calibration.runup_data.RunUpCurve`), a bank of mesh cycles of the run's
+gear pair at the run's torque (:func:`models.dynamics.walkers.cycle_bank`) and one sweep of
+all walkers along the run's time-ordered mesh-frequency path
+(:func:`models.dynamics.walkers.sweep_walkers`: the state is carried from point to point, up
+then down, so the run-up rows meet the up branch and the run-down rows the down branch). The
+sweep gives the peak DTE amplitudes ``D_h`` (m) of mesh harmonics ``h = 1..3``; the housing
+acceleration of harmonic ``h`` on channel ``c`` is ``G_c (2 pi h f_m)^2 D_h`` (PLAN section 1:
+the alternating mesh force is ``-m_e`` times the DTE acceleration, the housing accelerance is
+flat over the band), so the gain-free Arms the likelihood needs is
+
+.. math:: \mu_i = (2\pi f_{m,i})^2 \sqrt{\sum_{h=1}^{3} h^4 D_{h,i}^2}
+
+Conventions: ``zeta`` is relative to ``k_ref = s kbar_F0`` (``kbar_F0`` the mean error-free
+FVMS mesh stiffness of the pair at the run's torque), ``m_e`` the pair's equivalent mass
+(:func:`models.geometry.pair_equivalent_mass`, or the ``[calibration]`` override for runs on
+the campaign's gear set), the stiffness scale ``s`` exact through the cycle at ``T / s``;
+``backlash`` is the total ``2b`` on the line of action.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from models.dynamics.walkers import CycleBank, cycle_bank, sweep_walkers
+from models.geometry import GearPair
+from rigtools.calibration.runup_data import RunUpCurve
+
+__all__ = [
+    "DIRECTIONS",
+    "RunSweep",
+    "RunUpForward",
+    "acceleration_arms",
+    "build_forward",
+    "jump_frequencies",
+]
+
+#: The directions with a jump frequency.
+DIRECTIONS = ("up", "down")
+
+
+def acceleration_arms(amplitude_m: ArrayLike, mesh_frequency_Hz: ArrayLike) -> np.ndarray:
+    """Gain-free housing Arms ``(2 pi f_m)^2 sqrt(sum_h h^4 D_h^2)`` (m/s^2 per unit gain).
+
+    Parameters
+    ----------
+    amplitude_m : array_like
+        ``(..., N, 3)`` peak DTE amplitudes of harmonics 1..3 (m).
+    mesh_frequency_Hz : array_like
+        ``(N,)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(..., N)``.
+
+    Examples
+    --------
+    >>> a = acceleration_arms([[1e-6, 0.0, 0.0]], [1000.0])
+    >>> round(float(a[0]), 6) == round((2 * math.pi * 1000.0) ** 2 * 1e-6, 6)
+    True
+    """
+    d = np.asarray(amplitude_m, dtype=float)
+    f = np.asarray(mesh_frequency_Hz, dtype=float)
+    h4 = np.array([1.0, 16.0, 81.0])
+    return (2.0 * math.pi * f) ** 2 * np.sqrt(np.sum(h4 * d * d, axis=-1))
+
+
+def jump_frequencies(log_arms: ArrayLike, mesh_frequency_Hz: ArrayLike,
+                     direction: ArrayLike, *, channels_first: bool = False
+                     ) -> dict[str, np.ndarray]:
+    """Frequency of the largest ``|Delta log Arms|`` between neighbours, per direction.
+
+    Parameters
+    ----------
+    log_arms : array_like
+        ``(..., N)`` along the path in time order; NaN where unknown (a pair with a NaN is
+        skipped).
+    mesh_frequency_Hz : array_like
+        ``(N,)``.
+    direction : array_like
+        ``(N,)`` of ``"up"``, ``"down"``, ``"hold"`` (or None).
+    channels_first : bool
+        ``log_arms`` is ``(C, N)`` measured curves: the step between two neighbours is the
+        mean over the channels observed at both (so a channel missing at one point, with its
+        own gain, makes no step), and one frequency is returned per direction.
+
+    Returns
+    -------
+    dict
+        ``"up"``/``"down"`` -> ``(...)`` geometric mean of the two mesh frequencies around
+        the largest step (Hz), NaN when the direction has no two neighbouring points.
+    """
+    y = np.asarray(log_arms, dtype=float)
+    f = np.asarray(mesh_frequency_Hz, dtype=float)
+    d = np.asarray(direction, dtype=object)
+    out: dict[str, np.ndarray] = {}
+    lead = y.shape[1:-1] if channels_first else y.shape[:-1]
+    for name in DIRECTIONS:
+        pair = np.flatnonzero((d[:-1] == name) & (d[1:] == name))
+        if pair.size == 0:
+            out[name] = np.full(lead, np.nan)
+            continue
+        step = y[..., pair + 1] - y[..., pair]
+        if channels_first:
+            ok = np.isfinite(step)
+            with np.errstate(invalid="ignore"):
+                step = np.where(ok.any(axis=0), np.where(ok, step, 0.0).sum(axis=0)
+                                / np.maximum(ok.sum(axis=0), 1), np.nan)
+        step = np.abs(step)
+        finite = np.isfinite(step)
+        anyf = finite.any(axis=-1)
+        k = np.argmax(np.where(finite, step, -1.0), axis=-1)
+        fj = np.sqrt(f[pair] * f[pair + 1])[k]
+        out[name] = np.where(anyf, fj, np.nan)
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class RunSweep:
+    """The modelled run-up of one run for ``W`` parameter sets.
+
+    Attributes
+    ----------
+    log_mu : numpy.ndarray
+        ``(W, N)`` log of the gain-free Arms (:func:`acceleration_arms`), NaN/inf where the
+        sweep failed.
+    backside_impact : numpy.ndarray
+        ``(W, N)`` bool: a back flank was reached at the point.
+    contact_loss : numpy.ndarray
+        ``(W, N)`` bool.
+    converged : numpy.ndarray
+        ``(W, N)`` bool: the point settled on a periodic orbit.
+    """
+
+    log_mu: np.ndarray
+    backside_impact: np.ndarray
+    contact_loss: np.ndarray
+    converged: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class RunUpForward:
+    """One SDOF model over every run-up curve.
+
+    Attributes
+    ----------
+    kind : {"fvms", "vvms", "lste"}
+    curves : tuple of RunUpCurve
+    banks : tuple of CycleBank
+        One per curve (the run's pair and torque).
+    steps_per_period : int
+    """
+
+    kind: str
+    curves: tuple[RunUpCurve, ...]
+    banks: tuple[CycleBank, ...]
+    steps_per_period: int
+
+    @property
+    def scale_range(self) -> tuple[float, float]:
+        """Stiffness scales every bank covers (outside: no model)."""
+        lo = max(float(np.min(b.scales)) for b in self.banks)
+        hi = min(float(np.max(b.scales)) for b in self.banks)
+        return lo, hi
+
+    def sweeps(self, zeta: ArrayLike, stiffness_scale: ArrayLike, fluctuation_scale: ArrayLike,
+               backlash_m: ArrayLike) -> tuple[RunSweep, ...]:
+        """Sweep every run for ``W`` parameter sets (arrays ``(W,)``; backlash total, m)."""
+        z = np.ascontiguousarray(zeta, dtype=float)
+        s = np.ascontiguousarray(stiffness_scale, dtype=float)
+        e = np.ascontiguousarray(fluctuation_scale, dtype=float)
+        b = np.ascontiguousarray(backlash_m, dtype=float)
+        out = []
+        for curve, bank in zip(self.curves, self.banks, strict=True):
+            sw = sweep_walkers(bank, curve.mesh_frequency_Hz, zeta=z, stiffness_scale=s,
+                               fluctuation_scale=e, backlash_m=b,
+                               steps_per_period=self.steps_per_period)
+            a = acceleration_arms(sw.amplitude_m, curve.mesh_frequency_Hz)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                log_mu = np.where(a > 0, np.log(a), -np.inf)
+            out.append(RunSweep(log_mu=log_mu, backside_impact=np.asarray(sw.backside_impact),
+                                contact_loss=np.asarray(sw.contact_loss),
+                                converged=np.asarray(sw.converged)))
+        return tuple(out)
+
+    def natural_frequency_Hz(self, stiffness_scale: ArrayLike) -> np.ndarray:  # noqa: N802
+        """``sqrt(s kbar_F0 / m_e) / 2 pi`` with the first run's bank (Hz)."""
+        return np.asarray(self.banks[0].natural_frequency_Hz(stiffness_scale), dtype=float)
+
+    def model_natural_frequency_Hz(self, stiffness_scale: ArrayLike) -> np.ndarray:  # noqa: N802
+        """Per run, with the model's own mean stiffness at ``T / s``: ``(R, ...)`` (Hz)."""
+        return np.stack([np.asarray(b.model_natural_frequency_Hz(stiffness_scale), dtype=float)
+                         for b in self.banks])
+
+
+def build_forward(kind: str, curves: Sequence[RunUpCurve], pairs: Mapping[str, GearPair],
+                  masses_kg: Mapping[str, float | None], *,
+                  steps_per_period: int) -> RunUpForward:
+    """The banks of one model for every curve.
+
+    Parameters
+    ----------
+    kind : {"fvms", "vvms", "lste"}
+    curves : sequence of RunUpCurve
+    pairs : mapping
+        Run id -> the run's gear pair.
+    masses_kg : mapping
+        Run id -> ``m_e`` override (None: the package's convention).
+    steps_per_period : int
+
+    Returns
+    -------
+    RunUpForward
+    """
+    banks = tuple(cycle_bank(pairs[c.run_id], float(c.torque_Nm), kind,
+                             equivalent_mass_kg=masses_kg.get(c.run_id)) for c in curves)
+    return RunUpForward(kind=kind, curves=tuple(curves), banks=banks,
+                        steps_per_period=int(steps_per_period))
