@@ -862,19 +862,29 @@ def _tolerances(p: _Parser, t: Mapping[str, Any]) -> Tolerances:
     return replace(d, **kw)
 
 
-def _parameters(p: _Parser, priors: Any, fixed: Any) -> tuple[ParameterSpec, ...]:
-    priors = {} if priors is None else p.table("calibration.priors", priors)
-    fixed = {} if fixed is None else p.table("calibration.fixed", fixed)
-    names = list(PARAMETERS)
-    for table, where in ((priors, "calibration.priors"), (fixed, "calibration.fixed")):
-        for n in table:
-            if n not in PARAMETERS:
-                raise p.unknown(f"{where}.{n}", n, names, f"a parameter name in [{where}]")
+def _parameter_specs(p: _Parser, priors: Any, fixed: Any, *,
+                     table: Mapping[str, ParameterInfo], where: str,
+                     check: Callable[[str, Prior | None], None] | None = None,
+                     ) -> tuple[ParameterSpec, ...]:
+    """``[<where>.priors]`` and ``[<where>.fixed]`` resolved over ``table``, in its order.
+
+    ``check(name, prior)`` may refuse a prior the caller cannot use (a :class:`CampaignError`).
+    """
+    pwhere, fwhere = f"{where}.priors", f"{where}.fixed"
+    priors = {} if priors is None else p.table(pwhere, priors)
+    fixed = {} if fixed is None else p.table(fwhere, fixed)
+    names = list(table)
+    for given, at in ((priors, pwhere), (fixed, fwhere)):
+        for n in given:
+            if n not in table:
+                raise p.unknown(f"{at}.{n}", n, names, f"a parameter name in [{at}]")
     out = []
-    for name, info in PARAMETERS.items():
-        prior = p.prior(name, priors[name]) if name in priors else None
+    for name, info in table.items():
+        prior = p.prior(name, priors[name], where=pwhere, table=table) if name in priors else None
+        if check is not None:
+            check(name, prior)
         if name in fixed:
-            key = f"calibration.fixed.{name}"
+            key = f"{fwhere}.{name}"
             v = p.number(key, fixed[name])
             lo, hi = info.domain
             if not lo <= v <= hi:
@@ -882,7 +892,7 @@ def _parameters(p: _Parser, priors: Any, fixed: Any) -> tuple[ParameterSpec, ...
                               f"{info.unit}", f"{v:g}")
             if prior is not None and not prior.contains(v):
                 raise p.error(key, f"a fixed {name} that its prior {prior.describe()} "
-                              f"(calibration.priors.{name}) admits", f"{v:g}")
+                              f"({pwhere}.{name}) admits", f"{v:g}")
             out.append(ParameterSpec(name, info.unit, prior, v))
         elif prior is not None:
             out.append(ParameterSpec(name, info.unit, prior, None))
@@ -891,6 +901,10 @@ def _parameters(p: _Parser, priors: Any, fixed: Any) -> tuple[ParameterSpec, ...
         else:
             out.append(ParameterSpec(name, info.unit, None, float(info.default)))
     return tuple(out)
+
+
+def _parameters(p: _Parser, priors: Any, fixed: Any) -> tuple[ParameterSpec, ...]:
+    return _parameter_specs(p, priors, fixed, table=PARAMETERS, where="calibration")
 
 
 def _runup(p: _Parser, t: Mapping[str, Any]) -> RunUpSettings:
@@ -929,40 +943,16 @@ def _runup(p: _Parser, t: Mapping[str, Any]) -> RunUpSettings:
 
 
 def _runup_parameters(p: _Parser, priors: Any, fixed: Any) -> tuple[ParameterSpec, ...]:
-    pwhere, fwhere = "calibration.runup.priors", "calibration.runup.fixed"
-    priors = {} if priors is None else p.table(pwhere, priors)
-    fixed = {} if fixed is None else p.table(fwhere, fixed)
-    names = list(RUNUP_PARAMETERS)
-    for table, where in ((priors, pwhere), (fixed, fwhere)):
-        for n in table:
-            if n not in RUNUP_PARAMETERS:
-                raise p.unknown(f"{where}.{n}", n, names, f"a parameter name in [{where}]")
-    if "gain" in fixed:
-        raise p.error(f"{fwhere}.gain", "no fixed gain (the channel gains are marginalised "
+    where = "calibration.runup"
+    if fixed is not None and "gain" in p.table(f"{where}.fixed", fixed):
+        raise p.error(f"{where}.fixed.gain", "no fixed gain (the channel gains are marginalised "
                       "with their log-normal prior)", repr(fixed["gain"]))
-    out = []
-    for name, info in RUNUP_PARAMETERS.items():
-        prior = (p.prior(name, priors[name], where=pwhere, table=RUNUP_PARAMETERS)
-                 if name in priors else None)
+
+    def lognormal_gain(name: str, prior: Prior | None) -> None:
         if name == "gain" and prior is not None and (
                 prior.dist != "lognormal" or math.isfinite(prior.upper) or prior.lower > 0):
-            raise p.error(f"{pwhere}.gain", "an untruncated lognormal prior for gain (it is "
-                          "marginalised in closed form)", prior.describe())
-        if name in fixed:
-            key = f"{fwhere}.{name}"
-            v = p.number(key, fixed[name])
-            lo, hi = info.domain
-            if not lo <= v <= hi:
-                raise p.error(key, f"a fixed {name} in its domain [{lo:g}, {hi:g}] "
-                              f"{info.unit}", f"{v:g}")
-            if prior is not None and not prior.contains(v):
-                raise p.error(key, f"a fixed {name} that its prior {prior.describe()} "
-                              f"({pwhere}.{name}) admits", f"{v:g}")
-            out.append(ParameterSpec(name, info.unit, prior, v))
-        elif prior is not None:
-            out.append(ParameterSpec(name, info.unit, prior, None))
-        elif isinstance(info.default, Prior):
-            out.append(ParameterSpec(name, info.unit, info.default, None))
-        else:
-            out.append(ParameterSpec(name, info.unit, None, float(info.default)))
-    return tuple(out)
+            raise p.error(f"{where}.priors.gain", "an untruncated lognormal prior for gain (it "
+                          "is marginalised in closed form)", prior.describe())
+
+    return _parameter_specs(p, priors, fixed, table=RUNUP_PARAMETERS, where=where,
+                            check=lognormal_gain)
