@@ -24,16 +24,18 @@
 * :mod:`models.dynamics.two_stage`: the two-stage torsional model of seed 001 (two relative
   DTE coordinates, coupled through the intermediate shaft), RK4 and steady response, and the
   seed's six-state system with a flexible intermediate shaft as a plain reference;
-* :mod:`models.dynamics.two_stage_maps`: peak-DTE maps over mesh frequency x bulk temperature
-  (seed 001's temperature stiffness), parallel over temperature rows, and Poincare data for
-  bifurcation diagrams;
+* :mod:`models.dynamics.two_stage_thermal`: the two-stage model at a bulk temperature (seed
+  001's temperature stiffness, the inputs of the shipped two-stage gear sets);
+* :mod:`models.dynamics.two_stage_maps`: peak-DTE maps over mesh frequency x bulk temperature,
+  parallel over temperature rows, and Poincare data for bifurcation diagrams;
 * :mod:`models.dynamics.two_stage_kernels`: all compiled two-stage kernels (RK4, map rows) in
   one file, so numba's disk cache cannot go stale across modules;
-* :mod:`models.dynamics.tribo`, :mod:`~models.dynamics.tribo_ehl_coupling`,
-  :mod:`~models.dynamics.tribo_case`: the six-DOF tribo-dynamic model of seed 002 with mixed
-  EHL, its iterative decoupling loop, and the shipped cases ``seed-002-tribo`` (the seed's
-  tables, suspect mu_r) and ``seed-002-tribo-mixed`` (mu_r = 0.142 Pa s, reproduces the seed's
-  statements).
+* :mod:`models.dynamics.tribo`, :mod:`~models.dynamics.tribo_integrate`,
+  :mod:`~models.dynamics.tribo_ehl_coupling`, :mod:`~models.dynamics.tribo_case`: the six-DOF
+  tribo-dynamic model of seed 002 with mixed EHL, its compiled RK4 to the periodic steady
+  state (all its kernels in one file), its iterative decoupling loop, and the shipped cases
+  ``seed-002-tribo`` (the seed's tables, suspect mu_r) and ``seed-002-tribo-mixed`` (mu_r =
+  0.142 Pa s, reproduces the seed's statements).
 """
 
 from models.dynamics.back_flank import BACK_FLANKS, BackFlank, back_flank_offset
@@ -75,15 +77,7 @@ from models.dynamics.sweep import (
     sweep,
     sweep_up_down,
 )
-from models.dynamics.tribo import (
-    TriboDynamics,
-    TriboRecord,
-    build_tribo_dynamics,
-    series_stiffness,
-    tribo_periods,
-    tribo_periods_reference,
-    tribo_settle,
-)
+from models.dynamics.tribo import TriboDynamics, build_tribo_dynamics, series_stiffness
 from models.dynamics.tribo_case import (
     TriboCase,
     load_tribo_case,
@@ -97,6 +91,12 @@ from models.dynamics.tribo_ehl_coupling import (
     contact_cycle,
     solve_tribo_dynamics,
     tribo_iteration,
+)
+from models.dynamics.tribo_integrate import (
+    TriboRecord,
+    tribo_periods,
+    tribo_periods_reference,
+    tribo_settle,
 )
 from models.dynamics.two_stage import (
     MAX_STEP_OMEGA,
@@ -119,11 +119,13 @@ from models.dynamics.two_stage import (
 from models.dynamics.two_stage_maps import (
     Bifurcation,
     PeakDTEMap,
-    ThermalStiffness,
-    TwoStageThermalSetup,
     bifurcation_over_frequency,
     bifurcation_over_temperature,
     peak_dte_map,
+)
+from models.dynamics.two_stage_thermal import (
+    ThermalStiffness,
+    TwoStageThermalSetup,
     thermal_stiffness_component,
     two_stage_at_temperature,
 )

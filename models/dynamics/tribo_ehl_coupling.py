@@ -39,7 +39,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from models.dynamics.tribo import TriboDynamics, TriboRecord, tribo_settle
+from models.dynamics.tribo import TriboDynamics
+from models.dynamics.tribo_integrate import TriboRecord, tribo_settle
 from models.ehl.asperity import SEED_002_ROUGHNESS, Roughness, mixed_film_stiffness
 from models.ehl.lubricant import SEED_002_LUBRICANT, Lubricant
 from models.errors import ModelError
@@ -330,7 +331,7 @@ def tribo_iteration(
     y0 : numpy.ndarray, optional
         Start state of the dynamics (e.g. the previous periodic state).
     settle_tol : float
-        Periodicity tolerance of :func:`~models.dynamics.tribo.tribo_settle`.
+        Periodicity tolerance of :func:`~models.dynamics.tribo_integrate.tribo_settle`.
     ehl_samples : int
         EHL samples per mesh period.
     load_floor_N : float

@@ -1,7 +1,7 @@
 """Time a peak-DTE map of the two-stage thermal model (seed 001): parallel against serial.
 
 Grid: ``--temps`` bulk temperatures in [40, 120] deg C x ``--freqs`` stage-1 mesh frequencies
-in [2, 12] kHz, default setup of :class:`~models.dynamics.two_stage_maps.TwoStageThermalSetup`
+in [2, 12] kHz, default setup of :class:`~models.dynamics.two_stage_thermal.TwoStageThermalSetup`
 (seed 001's gear sets, 10 kN, 10 um half backlash, flash temperature per column), 200
 transient + 20 recorded system periods per point, 64 RK4 steps per stage-1 mesh period, state
 carried along frequency (up-sweep); a column gets more steps where the stiffest mode needs
@@ -34,11 +34,8 @@ from models.dynamics.two_stage_kernels import (
     map_rows_parallel,
     map_rows_serial,
 )
-from models.dynamics.two_stage_maps import (
-    TwoStageThermalSetup,
-    prepare_map_grid,
-    two_stage_at_temperature,
-)
+from models.dynamics.two_stage_maps import prepare_map_grid
+from models.dynamics.two_stage_thermal import TwoStageThermalSetup, two_stage_at_temperature
 
 TRANSIENT = 200
 RECORD = 20

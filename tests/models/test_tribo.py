@@ -35,9 +35,6 @@ from models.dynamics.tribo import (
     build_tribo_dynamics,
     series_stiffness,
     static_state,
-    tribo_periods,
-    tribo_periods_reference,
-    tribo_settle,
 )
 from models.dynamics.tribo_case import load_tribo_case, shipped_tribo_cases, solve_tribo_case
 from models.dynamics.tribo_ehl_coupling import (
@@ -47,6 +44,7 @@ from models.dynamics.tribo_ehl_coupling import (
     relative_change,
     tribo_iteration,
 )
+from models.dynamics.tribo_integrate import tribo_periods, tribo_periods_reference, tribo_settle
 from models.ehl import Roughness, film_stiffness
 from models.ehl.asperity import mixed_film_stiffness
 from models.errors import ModelError

@@ -22,6 +22,8 @@ from models.dynamics import (
     sdof_kernels,
     static_state,
     sweep,
+    tribo_ehl_coupling,
+    tribo_integrate,
     two_stage,
     two_stage_from_gear_sets,
     two_stage_kernels,
@@ -29,6 +31,7 @@ from models.dynamics import (
     two_stage_periods,
     two_stage_periods_reference,
     two_stage_steady_response,
+    two_stage_thermal,
 )
 from models.dynamics.two_stage import (
     MAX_STEP_OMEGA,
@@ -231,7 +234,7 @@ def test_diverging_response_is_flagged_not_reported_as_a_number():
 
 
 def test_cached_kernels_call_only_compiled_functions_of_their_own_file():
-    """Every cached kernel (two-stage and SDOF) calls compiled functions of its own file only.
+    """Every cached kernel (two-stage, SDOF, tribo) calls compiled functions of its own file only.
 
     numba's disk cache checks only the kernel's own file: a cached kernel that inlines a
     compiled function from another file keeps the stale copy after that file is edited. All
@@ -240,8 +243,8 @@ def test_cached_kernels_call_only_compiled_functions_of_their_own_file():
     from numba.core.dispatcher import Dispatcher
 
     checked = 0
-    for mod in (two_stage, two_stage_maps, two_stage_kernels, sdof_kernels, integrate, sweep,
-                parallel):
+    for mod in (two_stage, two_stage_maps, two_stage_thermal, two_stage_kernels, sdof_kernels,
+                integrate, sweep, parallel, tribo_integrate, tribo_ehl_coupling):
         for obj in vars(mod).values():
             if not (isinstance(obj, Dispatcher) and type(obj._cache).__name__ != "NullCache"):
                 continue

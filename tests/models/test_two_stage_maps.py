@@ -20,11 +20,13 @@ from models.dynamics import two_stage_steady_response
 from models.dynamics.two_stage import natural_frequencies
 from models.dynamics.two_stage_kernels import allocate_map_outputs, map_rows_serial
 from models.dynamics.two_stage_maps import (
-    TwoStageThermalSetup,
     bifurcation_over_frequency,
     bifurcation_over_temperature,
     peak_dte_map,
     prepare_map_grid,
+)
+from models.dynamics.two_stage_thermal import (
+    TwoStageThermalSetup,
     thermal_stiffness_component,
     two_stage_at_temperature,
 )
