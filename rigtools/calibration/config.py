@@ -41,59 +41,8 @@ Every key is optional; with no block at all the defaults below apply. A complete
     acceptance_range = [0.15, 0.75]
     min_narrowing = 2.0               # posterior sd at most prior sd / this, else a warning
 
-The SDOF run-up calibration (issue 20; :mod:`rigtools.calibration.runup_api`) is enabled by
-naming its models, and configured in a sub-table (every key optional; the values below are
-the defaults)::
-
-    [calibration]
-    models = ["fvms", "vvms", "lste"]     # default []: no run-up calibration
-
-    [calibration.runup]
-    max_speed_points = 100        # per direction (up, down), after binning a ramp
-    min_speed_points = 20         # usable points per run below which the run is refused
-    min_span = 1.3                # max/min mesh frequency a run-up must span
-    steps_per_period = 64         # RK4 steps per mesh period of the model sweeps
-    walkers = 32                  # default: [calibration] walkers
-    max_steps = 20000             # default: [calibration] max_steps
-
-    [calibration.runup.priors]    # the same prior tables as [calibration.priors]
-    zeta = {dist = "lognormal", median = 0.03, sigma = 0.7}
-    mesh_stiffness_scale = {dist = "lognormal", median = 1.0, sigma = 0.3}
-    fluctuation_scale = {dist = "lognormal", median = 1.0, sigma = 0.3}  # sampled only if given
-    backlash = {dist = "uniform", lower = 0.0, upper = 300.0}   # um, total 2b
-    gain = {dist = "lognormal", median = 0.01, sigma = 3.0}     # must be lognormal
-    model_error = {dist = "halfnormal", sd = 0.3}
-
-    [calibration.runup.fixed]
-    fluctuation_scale = 1.0       # the default; give it a prior (and no fixed value) to sample it
-
-Run-up parameters (``[calibration.runup.priors]`` / ``.fixed``; the ``[calibration]``
-tolerances, ``check_every``, ``seed`` and the equivalent-mass keys apply to it too):
-
-``zeta`` (1)
-    Damping ratio of the mesh relative to ``k_ref = s kbar_F0``: ``c = 2 zeta sqrt(k_ref m_e)``.
-    Default lognormal(median 0.03, sigma 0.7): 95 % in [0.008, 0.12], the range of spur-gear
-    mesh damping ratios in the literature.
-``mesh_stiffness_scale`` (1)
-    ``s``: every tooth compliance is ``C / s`` (the model at ``s`` is the mesh cycle at
-    ``T / s`` with ``k_ref = s kbar_F0``, ``kbar_F0`` the mean error-free FVMS mesh stiffness
-    of the pair); sets the mesh natural frequency ``sqrt(s kbar_F0 / m_e) / 2 pi``.
-    Default lognormal(1, 0.3), cut to the cycle banks' range [0.3, 3].
-``fluctuation_scale`` (1)
-    Scale of the alternating part of the mesh stiffness (FVMS, VVMS) or of the loaded static
-    transmission error (LSTE). Fixed at 1 by default: in the linear range only its product
-    with the gains is identified.
-``backlash`` (um)
-    Total backlash ``2b`` on the line of action. Identified only through back-side impacts;
-    default uniform(0, 300).
-``gain`` (1)
-    Prior of every channel gain ``G_c`` (housing acceleration over ``(2 pi h f_m)^2`` times
-    the DTE harmonic), one per run and channel, marginalised in closed form: it must be an
-    untruncated lognormal and cannot be fixed. Default lognormal(median 0.01, sigma 3): wide
-    (95 % over five decades), so the data set the gains.
-``model_error`` (1)
-    Standard deviation of ``log Arms`` about the model: the relative model and measurement
-    error of the curves. Default halfnormal(sd 0.3).
+``models`` and ``[calibration.runup]`` configure the SDOF run-up calibration:
+:mod:`rigtools.calibration.runup_config` lists their keys, parameters and defaults.
 
 Parameters
 ----------
@@ -142,40 +91,50 @@ Defaults, and why a test engineer can trust them on an FZG-type campaign
 * Sampler: 32 walkers (at least ``2 ndim + 2``), at most 20000 steps, convergence checked every
   100 steps, 8 MAP starts, seed 1.
 
-Errors name the key and its line (:class:`rigtools.errors.CampaignError`): an unknown key or
-parameter, a value of the wrong type, ``lower >= upper``, ``sd <= 0`` (or ``sigma``), a fixed
-value that its prior (or the parameter's domain) excludes; for the run-up: an unknown model
-in ``models``, a ``gain`` prior that is not an untruncated lognormal or a fixed ``gain``,
-``min_speed_points > max_speed_points``, ``min_span <= 1``, an odd number of walkers.
+Errors name the key and its line (:class:`rigtools.errors.CampaignError`,
+:class:`~rigtools.calibration.config_parsing.BlockParser`): an unknown key or parameter, a
+value of the wrong type, ``lower >= upper``, ``sd <= 0`` (or ``sigma``), a fixed value that
+its prior (or the parameter's domain) excludes, an odd number of walkers; for the run-up
+(:mod:`rigtools.calibration.runup_config`): an unknown model in ``models``, a ``gain`` prior
+that is not an untruncated lognormal or a fixed ``gain``, ``min_speed_points >
+max_speed_points``, ``min_span <= 1``.
 """
 
 from __future__ import annotations
 
-import difflib
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any, Final, Literal
 
 from models.thermal import SEED_000_CHI
-from rigtools.calibration.priors import DISTRIBUTIONS, Prior, prior_from_mapping
-from rigtools.errors import CampaignError
+from rigtools.calibration.config_parsing import (
+    BlockParser,
+    ParameterInfo,
+    ParameterSpec,
+    ValueCheck,
+    default_parameter_specs,
+    parameter_specs,
+    spec_named,
+    spec_tables,
+)
+from rigtools.calibration.priors import prior_from_mapping
+from rigtools.calibration.runup_config import (
+    RUNUP_MODELS,
+    RunUpModel,
+    RunUpSettings,
+    parse_runup_table,
+)
 
 __all__ = [
     "JAMMED_TREATMENTS",
     "LIKELIHOODS",
     "PARAMETERS",
-    "RUNUP_MODELS",
-    "RUNUP_PARAMETERS",
     "THERMAL_MODELS",
     "VARIANTS",
     "CalibrationConfig",
     "JammedTreatment",
     "LikelihoodKind",
-    "ParameterInfo",
-    "ParameterSpec",
-    "RunUpModel",
-    "RunUpSettings",
     "ThermalModel",
     "Tolerances",
     "Variant",
@@ -187,35 +146,11 @@ Variant = Literal["secant_path", "secant_mesh", "tangent"]
 ThermalModel = Literal["linear", "expansion"]
 JammedTreatment = Literal["censored", "double_flank"]
 LikelihoodKind = Literal["normal", "student_t"]
-RunUpModel = Literal["fvms", "vvms", "lste"]
 #: The model variants (issue 18 item 3), headline default first.
 VARIANTS: Final[tuple[Variant, ...]] = ("secant_path", "secant_mesh", "tangent")
 THERMAL_MODELS: Final[tuple[ThermalModel, ...]] = ("linear", "expansion")
 JAMMED_TREATMENTS: Final[tuple[JammedTreatment, ...]] = ("censored", "double_flank")
 LIKELIHOODS: Final[tuple[LikelihoodKind, ...]] = ("normal", "student_t")
-#: The SDOF mesh-stiffness models of the run-up calibration (issue 20).
-RUNUP_MODELS: Final[tuple[RunUpModel, ...]] = ("fvms", "vvms", "lste")
-
-
-@dataclass(frozen=True)
-class ParameterInfo:
-    """What a calibration parameter is.
-
-    Attributes
-    ----------
-    unit : str
-        Unit of its values in priors, fixed values and the summary.
-    domain : (float, float)
-        Values the physics accepts (a prior is cut to it, a fixed value must lie in it).
-    default : Prior or float
-        Default prior, or the default fixed value.
-    description : str
-    """
-
-    unit: str
-    domain: tuple[float, float]
-    default: Prior | float
-    description: str
 
 
 #: The global parameters, in sampling order.
@@ -239,35 +174,6 @@ PARAMETERS: Final[dict[str, ParameterInfo]] = {
                          "seed 000's thermoelastic correction factor"),
 }
 
-#: The parameters of the run-up (SDOF Arms) calibration, in sampling order. ``gain`` is the
-#: prior of every channel gain ``G_c``; the gains are marginalised, never sampled, so it must
-#: be log-normal and cannot be fixed.
-RUNUP_PARAMETERS: Final[dict[str, ParameterInfo]] = {
-    "zeta": ParameterInfo(
-        "1", (0.0, math.inf), prior_from_mapping({"dist": "lognormal", "median": 0.03,
-                                                  "sigma": 0.7}),
-        "damping ratio of the mesh, relative to k_ref = s kbar_F0"),
-    "mesh_stiffness_scale": ParameterInfo(
-        "1", (0.0, math.inf), prior_from_mapping({"dist": "lognormal", "median": 1.0,
-                                                  "sigma": 0.3}),
-        "s: mesh compliance C/s (the model at s is the mesh cycle at T/s, k_ref = s kbar_F0)"),
-    "fluctuation_scale": ParameterInfo(
-        "1", (0.0, math.inf), 1.0,  # fixed by default: only G eps is identified when linear
-        "scale of the alternating part of the mesh stiffness (FVMS, VVMS) or of the loaded "
-        "static transmission error (LSTE)"),
-    "backlash": ParameterInfo(
-        "um", (0.0, math.inf), prior_from_mapping({"dist": "uniform", "lower": 0.0,
-                                                   "upper": 300.0}),
-        "total backlash 2b on the line of action"),
-    "model_error": ParameterInfo(
-        "1", (0.0, math.inf), prior_from_mapping({"dist": "halfnormal", "sd": 0.3}),
-        "sigma of log Arms: relative model error of the Arms curves"),
-    "gain": ParameterInfo(
-        "1", (0.0, math.inf), prior_from_mapping({"dist": "lognormal", "median": 0.01,
-                                                  "sigma": 3.0}),
-        "G_c: housing acceleration over (2 pi h f_m)^2 DTE, per channel (marginalised)"),
-}
-
 _TOP_KEYS: Final = (
     "model_variant", "compare_variants", "thermal_model", "jammed_model", "likelihood",
     "student_t_dof", "channels", "detection_probability", "structural_modes", "band_Hz",
@@ -276,35 +182,6 @@ _TOP_KEYS: Final = (
     "seed", "map_starts", "plan_torque_range_Nm", "plan_temperature_range_C", "priors", "fixed",
     "tolerances", "models", "runup",
 )
-_RUNUP_KEYS: Final = ("max_speed_points", "min_speed_points", "min_span", "steps_per_period",
-                       "walkers", "max_steps", "priors", "fixed")
-_TOLERANCE_KEYS: Final = ("unchanged_band_um", "regime_probability", "max_r_hat",
-                          "min_ess_bulk", "acceptance_range", "min_narrowing")
-
-
-@dataclass(frozen=True)
-class ParameterSpec:
-    """One global parameter as configured: a prior (sampled) or a fixed value.
-
-    Attributes
-    ----------
-    name : str
-    unit : str
-    prior : Prior or None
-        None when fixed.
-    fixed : float or None
-        The fixed value, in ``unit``.
-    """
-
-    name: str
-    unit: str
-    prior: Prior | None
-    fixed: float | None
-
-    @property
-    def free(self) -> bool:
-        """Sampled (has a prior and no fixed value)."""
-        return self.fixed is None
 
 
 @dataclass(frozen=True)
@@ -338,65 +215,6 @@ class Tolerances:
     min_ess_bulk: float = 400.0
     acceptance_range: tuple[float, float] = (0.15, 0.75)
     min_narrowing: float = 2.0
-
-
-@dataclass(frozen=True)
-class RunUpSettings:
-    """The ``[calibration.runup]`` table: data preparation and sampler of the run-up fit.
-
-    Attributes
-    ----------
-    max_speed_points : int
-        Points per direction (up, down) after binning a ramp (median per equal-log-f bin).
-    min_speed_points : int
-        Usable points per run below which the run is refused.
-    min_span : float
-        Smallest ratio max/min of the mesh frequency a run-up must span.
-    steps_per_period : int
-        Integration steps per mesh period of the model sweeps.
-    walkers : int or None
-        Walkers of the ensemble sampler; None: the ``[calibration]`` setting.
-    max_steps : int or None
-        Largest number of sampler steps; None: the ``[calibration]`` setting.
-    parameters : tuple of ParameterSpec
-        In :data:`RUNUP_PARAMETERS` order (``gain`` always has its log-normal prior).
-    """
-
-    max_speed_points: int = 100
-    min_speed_points: int = 20
-    min_span: float = 1.3
-    steps_per_period: int = 64
-    walkers: int | None = None
-    max_steps: int | None = None
-    parameters: tuple[ParameterSpec, ...] = field(
-        default_factory=lambda: _default_runup_parameters())
-
-    def parameter(self, name: str) -> ParameterSpec:
-        """The spec of run-up parameter ``name``."""
-        for p in self.parameters:
-            if p.name == name:
-                return p
-        raise KeyError(name)
-
-    @property
-    def free_parameters(self) -> tuple[str, ...]:
-        """Names of the sampled run-up parameters (``gain`` excluded: marginalised)."""
-        return tuple(p.name for p in self.parameters if p.free and p.name != "gain")
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready form in the keys of the TOML table (unset keys left out)."""
-        d: dict[str, Any] = {
-            "max_speed_points": self.max_speed_points,
-            "min_speed_points": self.min_speed_points,
-            "min_span": self.min_span,
-            "steps_per_period": self.steps_per_period,
-            "walkers": self.walkers,
-            "max_steps": self.max_steps,
-            "priors": {p.name: p.prior.to_dict() for p in self.parameters
-                       if p.prior is not None and p.free},
-            "fixed": {p.name: p.fixed for p in self.parameters if not p.free},
-        }
-        return {k: v for k, v in d.items() if v is not None}
 
 
 @dataclass(frozen=True)
@@ -469,17 +287,15 @@ class CalibrationConfig:
     map_starts: int = 8
     plan_torque_range_Nm: tuple[float, float] | None = None
     plan_temperature_range_C: tuple[float, float] | None = None
-    parameters: tuple[ParameterSpec, ...] = field(default_factory=lambda: _default_parameters())
+    parameters: tuple[ParameterSpec, ...] = field(
+        default_factory=lambda: default_parameter_specs(PARAMETERS))
     tolerances: Tolerances = field(default_factory=Tolerances)
     models: tuple[RunUpModel, ...] = ()
     runup: RunUpSettings = field(default_factory=RunUpSettings)
 
     def parameter(self, name: str) -> ParameterSpec:
         """The spec of parameter ``name``."""
-        for p in self.parameters:
-            if p.name == name:
-                return p
-        raise KeyError(name)
+        return spec_named(self.parameters, name)
 
     @property
     def free_parameters(self) -> tuple[str, ...]:
@@ -522,9 +338,7 @@ class CalibrationConfig:
                                      else list(self.plan_torque_range_Nm)),
             "plan_temperature_range_C": (None if self.plan_temperature_range_C is None
                                          else list(self.plan_temperature_range_C)),
-            "priors": {p.name: p.prior.to_dict() for p in self.parameters
-                       if p.prior is not None and p.free},
-            "fixed": {p.name: p.fixed for p in self.parameters if not p.free},
+            **spec_tables(self.parameters),
             "tolerances": {"unchanged_band_um": t.unchanged_band_um,
                            "regime_probability": t.regime_probability,
                            "max_r_hat": t.max_r_hat, "min_ess_bulk": t.min_ess_bulk,
@@ -537,146 +351,9 @@ class CalibrationConfig:
                 or k == "compare_variants"}
 
 
-def _default_parameters() -> tuple[ParameterSpec, ...]:
-    out = []
-    for name, info in PARAMETERS.items():
-        if isinstance(info.default, Prior):
-            out.append(ParameterSpec(name, info.unit, info.default, None))
-        else:
-            out.append(ParameterSpec(name, info.unit, None, float(info.default)))
-    return tuple(out)
-
-
-def _default_runup_parameters() -> tuple[ParameterSpec, ...]:
-    out = []
-    for name, info in RUNUP_PARAMETERS.items():
-        if isinstance(info.default, Prior):
-            out.append(ParameterSpec(name, info.unit, info.default, None))
-        else:
-            out.append(ParameterSpec(name, info.unit, None, float(info.default)))
-    return tuple(out)
-
-
 def default_config() -> CalibrationConfig:
     """The configuration used when a campaign has no ``[calibration]`` block."""
     return CalibrationConfig()
-
-
-# --------------------------------------------------------------------------------------------
-# parsing
-
-
-class _Parser:
-    """Checks one block, raising :class:`CampaignError` with the key and its line."""
-
-    def __init__(self, source: str, line_of: Callable[[str], int | None]) -> None:
-        self.source = source
-        self.line_of = line_of
-
-    def error(self, key: str, expected: str, found: str) -> CampaignError:
-        line = self.line_of(key)
-        return CampaignError(self.source, f"line {line}" if line else None, expected, found)
-
-    def unknown(self, key: str, name: str, allowed: Sequence[str], what: str) -> CampaignError:
-        close = difflib.get_close_matches(name, list(allowed), n=1, cutoff=0.6)
-        hint = f" (did you mean {close[0]!r}?)" if close else ""
-        return self.error(key, f"{what}: {', '.join(allowed)}", f"unknown {name!r}{hint}")
-
-    def table(self, key: str, value: Any) -> Mapping[str, Any]:
-        if not isinstance(value, Mapping):
-            raise self.error(key, f"a table for {key}", repr(value))
-        return value
-
-    def number(self, key: str, value: Any, *, minimum: float | None = None,
-               exclusive: bool = False, maximum: float | None = None,
-               exclusive_max: bool = False) -> float:
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise self.error(key, f"a number for {key}", repr(value))
-        v = float(value)
-        if not math.isfinite(v):
-            raise self.error(key, f"a finite number for {key}", repr(value))
-        if minimum is not None and (v <= minimum if exclusive else v < minimum):
-            raise self.error(key, f"{key} {'>' if exclusive else '>='} {minimum:g}", f"{v:g}")
-        if maximum is not None and (v >= maximum if exclusive_max else v > maximum):
-            raise self.error(key, f"{key} {'<' if exclusive_max else '<='} {maximum:g}",
-                             f"{v:g}")
-        return v
-
-    def integer(self, key: str, value: Any, *, minimum: int) -> int:
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise self.error(key, f"an integer for {key}", repr(value))
-        if value < minimum:
-            raise self.error(key, f"{key} >= {minimum}", str(value))
-        return int(value)
-
-    def choice(self, key: str, value: Any, allowed: Sequence[str]) -> str:
-        if not isinstance(value, str) or value not in allowed:
-            raise self.error(key, f"one of {', '.join(repr(a) for a in allowed)} for {key}",
-                             repr(value))
-        return value
-
-    def pair(self, key: str, value: Any, *, positive: bool = True) -> tuple[float, float]:
-        if not isinstance(value, list | tuple) or len(value) != 2:
-            raise self.error(key, f"two numbers [low, high] for {key}", repr(value))
-        lo, hi = (self.number(key, v, minimum=0.0, exclusive=positive) for v in value)
-        if not lo < hi:
-            raise self.error(key, f"{key} = [low, high] with low < high", repr(list(value)))
-        return lo, hi
-
-    def strings(self, key: str, value: Any) -> tuple[str, ...]:
-        if not isinstance(value, list | tuple) or not all(
-                isinstance(v, str) and v for v in value):
-            raise self.error(key, f"a list of names for {key}", repr(value))
-        if len(set(value)) != len(value):
-            raise self.error(key, f"names without repeats for {key}", repr(list(value)))
-        return tuple(value)
-
-    # -- priors ---------------------------------------------------------------------------
-    def prior(self, name: str, spec: Any, *, where: str = "calibration.priors",
-              table: Mapping[str, ParameterInfo] = PARAMETERS) -> Prior:
-        key = f"{where}.{name}"
-        spec = self.table(key, spec)
-        if "dist" not in spec:
-            raise self.error(key, f"key 'dist' ({', '.join(DISTRIBUTIONS)}) in {key}", "none")
-        dist = self.choice(f"{key}.dist", spec["dist"], list(DISTRIBUTIONS))
-        required, optional = DISTRIBUTIONS[dist]
-        for k in spec:
-            if k != "dist" and k not in required + optional:
-                raise self.unknown(f"{key}.{k}", k, ("dist", *required, *optional),
-                                   f"a key of a {dist} prior in {key}")
-        for k in required:
-            if k not in spec:
-                raise self.error(key, f"key {k!r} of a {dist} prior in {key}", "none")
-        values = {k: self.number(f"{key}.{k}", spec[k]) for k in spec if k != "dist"}
-        for k in ("sd", "sigma", "median"):
-            if k in values and not values[k] > 0:
-                raise self.error(f"{key}.{k}", f"{k} > 0 in {key}", f"{k} = {values[k]:g}")
-        if "lower" in values and "upper" in values and not values["lower"] < values["upper"]:
-            raise self.error(f"{key}.lower", f"lower < upper in {key}",
-                             f"lower = {values['lower']:g}, upper = {values['upper']:g}")
-        lo_dom, hi_dom = table[name].domain
-        natural_lo = {"lognormal": 0.0, "halfnormal": 0.0}.get(dist, -math.inf)
-        lo = max(values.get("lower", natural_lo), lo_dom, natural_lo)
-        hi = min(values.get("upper", math.inf), hi_dom)
-        if not lo < hi:
-            raise self.error(key, f"a prior for {name} that admits values in its domain "
-                             f"[{lo_dom:g}, {hi_dom:g}] {table[name].unit}",
-                             f"support [{values.get('lower', natural_lo):g}, "
-                             f"{values.get('upper', math.inf):g}]")
-        if "lower" in values and dist == "lognormal" and values["lower"] < 0:
-            raise self.error(f"{key}.lower", f"lower >= 0 for a lognormal prior in {key}",
-                             f"lower = {values['lower']:g}")
-        built = dict(values, dist=dist)
-        if (lo, hi) != (values.get("lower", natural_lo), values.get("upper", math.inf)):
-            built.update(lower=lo, upper=hi)
-            if dist == "uniform" and not math.isfinite(hi):
-                raise self.error(key, f"finite bounds for {name}", f"[{lo:g}, {hi:g}]")
-            if dist == "halfnormal":
-                built.pop("lower", None)
-        try:
-            return prior_from_mapping(built)
-        except ValueError as exc:  # every case is checked above; kept as a safety net
-            raise self.error(key, f"a valid prior for {name}", str(exc)) from None
 
 
 def parse_calibration_block(
@@ -719,11 +396,8 @@ def parse_calibration_block(
     """
     if block is None:
         return default_config()
-    p = _Parser(source, line_of)
-    block = p.table("calibration", block)
-    for k in block:
-        if k not in _TOP_KEYS:
-            raise p.unknown(f"calibration.{k}", k, _TOP_KEYS, "a key of [calibration]")
+    p = BlockParser(source, line_of)
+    block = p.known_table("calibration", block, _TOP_KEYS)
     kw: dict[str, Any] = {}
 
     def key(k: str) -> str:
@@ -732,10 +406,8 @@ def parse_calibration_block(
     if "model_variant" in block:
         kw["model_variant"] = p.choice(key("model_variant"), block["model_variant"], VARIANTS)
     if "compare_variants" in block:
-        names = p.strings(key("compare_variants"), block["compare_variants"])
-        for n in names:
-            p.choice(key("compare_variants"), n, VARIANTS)
-        kw["compare_variants"] = names
+        kw["compare_variants"] = p.choices(key("compare_variants"), block["compare_variants"],
+                                           VARIANTS)
     if "thermal_model" in block:
         kw["thermal_model"] = p.choice(key("thermal_model"), block["thermal_model"],
                                        THERMAL_MODELS)
@@ -783,10 +455,7 @@ def parse_calibration_block(
         kw["temperature_sd_K"] = p.number(key("temperature_sd_K"), block["temperature_sd_K"],
                                           minimum=0.0, exclusive=True)
     if "walkers" in block:
-        w = p.integer(key("walkers"), block["walkers"], minimum=4)
-        if w % 2:
-            raise p.error(key("walkers"), "an even number of walkers", str(w))
-        kw["walkers"] = w
+        kw["walkers"] = p.walkers(key("walkers"), block["walkers"])
     if "max_steps" in block:
         kw["max_steps"] = p.integer(key("max_steps"), block["max_steps"], minimum=1)
     if "check_every" in block:
@@ -810,15 +479,13 @@ def parse_calibration_block(
                           repr(list(v)))
         kw["plan_temperature_range_C"] = (lo, hi)
     if "tolerances" in block:
-        kw["tolerances"] = _tolerances(p, p.table(key("tolerances"), block["tolerances"]))
+        kw["tolerances"] = _tolerances(p, block["tolerances"])
     if "models" in block:
-        names = p.strings(key("models"), block["models"])
-        for n in names:
-            p.choice(key("models"), n, RUNUP_MODELS)
-        kw["models"] = names
+        kw["models"] = p.choices(key("models"), block["models"], RUNUP_MODELS)
     if "runup" in block:
-        kw["runup"] = _runup(p, p.table(key("runup"), block["runup"]))
-    kw["parameters"] = _parameters(p, block.get("priors"), block.get("fixed"))
+        kw["runup"] = parse_runup_table(p, block["runup"])
+    kw["parameters"] = parameter_specs(p, block.get("priors"), block.get("fixed"),
+                                       table=PARAMETERS, where="calibration")
     cfg = CalibrationConfig(**kw)
     if cfg.compare_variants and cfg.model_variant not in cfg.compare_variants:
         raise p.error(key("compare_variants"),
@@ -827,132 +494,26 @@ def parse_calibration_block(
     return cfg
 
 
-def _tolerances(p: _Parser, t: Mapping[str, Any]) -> Tolerances:
-    for k in t:
-        if k not in _TOLERANCE_KEYS:
-            raise p.unknown(f"calibration.tolerances.{k}", k, _TOLERANCE_KEYS,
-                            "a key of [calibration.tolerances]")
-    d = Tolerances()
-    kw: dict[str, Any] = {}
-
-    def key(k: str) -> str:
-        return f"calibration.tolerances.{k}"
-
-    if "unchanged_band_um" in t:
-        kw["unchanged_band_um"] = p.number(key("unchanged_band_um"), t["unchanged_band_um"],
-                                           minimum=0.0)
-    if "regime_probability" in t:
-        kw["regime_probability"] = p.number(key("regime_probability"), t["regime_probability"],
-                                            minimum=0.5, exclusive=True, maximum=1.0,
-                                            exclusive_max=True)
-    if "max_r_hat" in t:
-        kw["max_r_hat"] = p.number(key("max_r_hat"), t["max_r_hat"], minimum=1.0,
-                                   exclusive=True)
-    if "min_ess_bulk" in t:
-        kw["min_ess_bulk"] = p.number(key("min_ess_bulk"), t["min_ess_bulk"], minimum=0.0,
-                                      exclusive=True)
-    if "acceptance_range" in t:
-        lo, hi = p.pair(key("acceptance_range"), t["acceptance_range"])
-        if hi >= 1.0:
-            raise p.error(key("acceptance_range"), "bounds inside (0, 1)",
-                          repr(list(t["acceptance_range"])))
-        kw["acceptance_range"] = (lo, hi)
-    if "min_narrowing" in t:
-        kw["min_narrowing"] = p.number(key("min_narrowing"), t["min_narrowing"], minimum=1.0)
-    return replace(d, **kw)
+def _tolerances(p: BlockParser, value: Any) -> Tolerances:
+    t = p.known_table("calibration.tolerances", value, _TOLERANCE_KEYS)
+    return replace(Tolerances(), **p.values("calibration.tolerances", t, _TOLERANCE_CHECKS))
 
 
-def _parameter_specs(p: _Parser, priors: Any, fixed: Any, *,
-                     table: Mapping[str, ParameterInfo], where: str,
-                     check: Callable[[str, Prior | None], None] | None = None,
-                     ) -> tuple[ParameterSpec, ...]:
-    """``[<where>.priors]`` and ``[<where>.fixed]`` resolved over ``table``, in its order.
-
-    ``check(name, prior)`` may refuse a prior the caller cannot use (a :class:`CampaignError`).
-    """
-    pwhere, fwhere = f"{where}.priors", f"{where}.fixed"
-    priors = {} if priors is None else p.table(pwhere, priors)
-    fixed = {} if fixed is None else p.table(fwhere, fixed)
-    names = list(table)
-    for given, at in ((priors, pwhere), (fixed, fwhere)):
-        for n in given:
-            if n not in table:
-                raise p.unknown(f"{at}.{n}", n, names, f"a parameter name in [{at}]")
-    out = []
-    for name, info in table.items():
-        prior = p.prior(name, priors[name], where=pwhere, table=table) if name in priors else None
-        if check is not None:
-            check(name, prior)
-        if name in fixed:
-            key = f"{fwhere}.{name}"
-            v = p.number(key, fixed[name])
-            lo, hi = info.domain
-            if not lo <= v <= hi:
-                raise p.error(key, f"a fixed {name} in its domain [{lo:g}, {hi:g}] "
-                              f"{info.unit}", f"{v:g}")
-            if prior is not None and not prior.contains(v):
-                raise p.error(key, f"a fixed {name} that its prior {prior.describe()} "
-                              f"({pwhere}.{name}) admits", f"{v:g}")
-            out.append(ParameterSpec(name, info.unit, prior, v))
-        elif prior is not None:
-            out.append(ParameterSpec(name, info.unit, prior, None))
-        elif isinstance(info.default, Prior):
-            out.append(ParameterSpec(name, info.unit, info.default, None))
-        else:
-            out.append(ParameterSpec(name, info.unit, None, float(info.default)))
-    return tuple(out)
+def _acceptance_range(p: BlockParser, key: str, value: Any) -> tuple[float, float]:
+    lo, hi = p.pair(key, value)
+    if hi >= 1.0:
+        raise p.error(key, "bounds inside (0, 1)", repr(list(value)))
+    return lo, hi
 
 
-def _parameters(p: _Parser, priors: Any, fixed: Any) -> tuple[ParameterSpec, ...]:
-    return _parameter_specs(p, priors, fixed, table=PARAMETERS, where="calibration")
-
-
-def _runup(p: _Parser, t: Mapping[str, Any]) -> RunUpSettings:
-    for k in t:
-        if k not in _RUNUP_KEYS:
-            raise p.unknown(f"calibration.runup.{k}", k, _RUNUP_KEYS,
-                            "a key of [calibration.runup]")
-    kw: dict[str, Any] = {}
-
-    def key(k: str) -> str:
-        return f"calibration.runup.{k}"
-
-    if "max_speed_points" in t:
-        kw["max_speed_points"] = p.integer(key("max_speed_points"), t["max_speed_points"],
-                                           minimum=3)
-    if "min_speed_points" in t:
-        kw["min_speed_points"] = p.integer(key("min_speed_points"), t["min_speed_points"],
-                                           minimum=3)
-    if "min_span" in t:
-        kw["min_span"] = p.number(key("min_span"), t["min_span"], minimum=1.0, exclusive=True)
-    if "steps_per_period" in t:
-        kw["steps_per_period"] = p.integer(key("steps_per_period"), t["steps_per_period"],
-                                           minimum=16)
-    if "walkers" in t:
-        w = p.integer(key("walkers"), t["walkers"], minimum=4)
-        if w % 2:
-            raise p.error(key("walkers"), "an even number of walkers", str(w))
-        kw["walkers"] = w
-    if "max_steps" in t:
-        kw["max_steps"] = p.integer(key("max_steps"), t["max_steps"], minimum=1)
-    if kw.get("min_speed_points", 20) > kw.get("max_speed_points", 100):
-        raise p.error(key("min_speed_points"), "min_speed_points <= max_speed_points",
-                      f"{kw.get('min_speed_points', 20)} > {kw.get('max_speed_points', 100)}")
-    kw["parameters"] = _runup_parameters(p, t.get("priors"), t.get("fixed"))
-    return RunUpSettings(**kw)
-
-
-def _runup_parameters(p: _Parser, priors: Any, fixed: Any) -> tuple[ParameterSpec, ...]:
-    where = "calibration.runup"
-    if fixed is not None and "gain" in p.table(f"{where}.fixed", fixed):
-        raise p.error(f"{where}.fixed.gain", "no fixed gain (the channel gains are marginalised "
-                      "with their log-normal prior)", repr(fixed["gain"]))
-
-    def lognormal_gain(name: str, prior: Prior | None) -> None:
-        if name == "gain" and prior is not None and (
-                prior.dist != "lognormal" or math.isfinite(prior.upper) or prior.lower > 0):
-            raise p.error(f"{where}.priors.gain", "an untruncated lognormal prior for gain (it "
-                          "is marginalised in closed form)", prior.describe())
-
-    return _parameter_specs(p, priors, fixed, table=RUNUP_PARAMETERS, where=where,
-                            check=lognormal_gain)
+#: The keys of ``[calibration.tolerances]``, checked in this order.
+_TOLERANCE_CHECKS: Final[dict[str, ValueCheck]] = {
+    "unchanged_band_um": lambda p, k, v: p.number(k, v, minimum=0.0),
+    "regime_probability": lambda p, k, v: p.number(k, v, minimum=0.5, exclusive=True,
+                                                   maximum=1.0, exclusive_max=True),
+    "max_r_hat": lambda p, k, v: p.number(k, v, minimum=1.0, exclusive=True),
+    "min_ess_bulk": lambda p, k, v: p.number(k, v, minimum=0.0, exclusive=True),
+    "acceptance_range": _acceptance_range,
+    "min_narrowing": lambda p, k, v: p.number(k, v, minimum=1.0),
+}
+_TOLERANCE_KEYS: Final = tuple(_TOLERANCE_CHECKS)

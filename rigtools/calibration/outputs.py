@@ -41,8 +41,10 @@ from rigtools.calibration.result import CalibrationResult, VariantFit
 
 __all__ = [
     "CSV_COLUMNS",
+    "csv_cell",
     "inference_data",
     "replace_atomically",
+    "rigtools_version",
     "write_outputs",
     "write_summary_csv",
     "write_summary_json",
@@ -53,7 +55,8 @@ CSV_COLUMNS: Final = ("name", "kind", "unit", "mean", "sd", "q05", "q50", "q95",
                       "r_hat")
 
 
-def _version() -> str:
+def rigtools_version() -> str:
+    """The installed rigtools version recorded in the outputs ("unknown" when not installed)."""
     try:
         return version("rigtools")
     except PackageNotFoundError:
@@ -126,7 +129,7 @@ def inference_data(fit: VariantFit, *, config: dict[str, Any], seed: int,
                   "burn_in": fit.run.burn_in, "thin": fit.run.thin,
                   "tau": json.dumps([float(t) for t in fit.run.tau]),
                   "walkers": int(fit.samples.shape[0]), "seed": int(seed),
-                  "rigtools_version": _version()}
+                  "rigtools_version": rigtools_version()}
     base_attrs.update(attrs or {})
     return az.from_dict(
         posterior=posterior,
@@ -141,7 +144,8 @@ def inference_data(fit: VariantFit, *, config: dict[str, Any], seed: int,
     )
 
 
-def _cell(v: Any) -> str:
+def csv_cell(v: Any) -> str:
+    """``v`` as a CSV cell: empty for None and for a non-finite float, else its repr/str."""
     if v is None:
         return ""
     if isinstance(v, float):
@@ -170,7 +174,7 @@ def write_summary_csv(result: CalibrationResult, path: Path) -> None:
     for kind in ("parameters", "derived"):
         for name, s in result.summary[kind].items():
             w.writerow([name, kind[:-1] if kind == "parameters" else kind, s["unit"],
-                        *(_cell(s[c]) for c in CSV_COLUMNS[3:])])
+                        *(csv_cell(s[c]) for c in CSV_COLUMNS[3:])])
     replace_atomically(path, buf.getvalue())
 
 

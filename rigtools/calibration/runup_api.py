@@ -21,23 +21,20 @@ Steps (issue 20):
 2. Per model: the cycle banks of every run's pair and torque
    (:mod:`~rigtools.calibration.runup_forward`), the log posterior with the gains
    marginalised (:mod:`~rigtools.calibration.runup_model`), the MAP by vectorised
-   differential evolution (:func:`find_runup_map`) and emcee to the
+   differential evolution (:func:`~rigtools.calibration.runup_map.find_runup_map`) and emcee
+   to the
    autocorrelation rule with the unchanged :func:`~rigtools.calibration.sampler.run_sampler`,
    resumable from ``<outdir>/runup/chains.h5`` (group ``runup-<model>``).
 3. From at most :data:`~rigtools.calibration.runup_outputs.MAX_STORED_DRAWS` posterior draws:
    the gains drawn from their exact conditional, the pointwise log-likelihood per (run,
    channel, point), the posterior predictive Arms bands and the jump frequencies.
-4. Summary per model: every parameter with mean, sd, 5/50/95 % quantiles, bulk ESS and
-   split-walker R-hat, and ``identified`` (posterior sd under the prior sd divided by
-   ``[calibration.tolerances] min_narrowing``, 2 by default). A parameter the data do not
-   identify keeps its sd but has its mean and interval null, a statement and a warning: the
-   prior is never reported as a result. The backlash in particular is identified only
-   through back-side impacts: with a posterior probability of an impact anywhere (the sweep
-   flags) under :data:`BACKSIDE_PROBABILITY` the summary says :data:`NO_BACKSIDE_STATEMENT`.
-   Derived: ``mesh_natural_frequency_Hz = sqrt(s kbar_F0 / m_e) / 2 pi`` and, per run,
-   ``mesh_natural_frequency_Hz@<run>`` with the model's own mean stiffness at ``T / s``. A run
-   whose posterior natural frequency lies outside its measured mesh-frequency range did not
-   reach the resonance: a warning naming it.
+4. Summary per model (:func:`~rigtools.calibration.runup_summary.runup_summary`): every
+   parameter with its quantiles, ESS, R-hat and ``identified`` (posterior sd under the prior
+   sd divided by ``[calibration.tolerances] min_narrowing``); a parameter the data do not
+   identify has its mean and interval null, a statement and a warning: the prior is never
+   reported as a result (the backlash: only through back-side impacts). Derived: the mesh
+   natural frequency, overall and per run, with a warning for a run whose ramp does not
+   reach it.
 5. The models are compared by PSIS-LOO (:func:`~rigtools.calibration.comparison.
    compare_variants`: elpd differences with their standard errors, Pareto k). Neighbouring
    points of a curve are correlated (a jump one point off moves two residuals), which makes
@@ -58,24 +55,22 @@ import time
 import warnings
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any, Final
+from typing import Final
 
 import arviz as az
 import numpy as np
 import pandas as pd
 
 from models.errors import ModelError
-from models.geometry import EQUIVALENT_MASS_CONVENTION, GearPair, pair_equivalent_mass
+from models.geometry import GearPair, pair_equivalent_mass
 from rigtools.calibration.campaign_inputs import (
     ObservationsInput,
     campaign_config,
     campaign_observations,
 )
 from rigtools.calibration.comparison import ModelComparison, compare_variants
-from rigtools.calibration.config import RUNUP_PARAMETERS, CalibrationConfig, Tolerances
-from rigtools.calibration.diagnostics import sampler_warnings, summarize
+from rigtools.calibration.config import CalibrationConfig
 from rigtools.calibration.errors import CalibrationError
-from rigtools.calibration.priors import Prior
 from rigtools.calibration.runup_data import RunUpData, has_interior_maximum, prepare_runups
 from rigtools.calibration.runup_forward import (
     DIRECTIONS,
@@ -84,6 +79,7 @@ from rigtools.calibration.runup_forward import (
     jump_frequencies,
 )
 from rigtools.calibration.runup_likelihood import gain_conditional, pointwise_log_likelihood
+from rigtools.calibration.runup_map import find_runup_map
 from rigtools.calibration.runup_model import RunUpPosterior, build_posterior
 from rigtools.calibration.runup_outputs import (
     MAX_STORED_DRAWS,
@@ -93,38 +89,21 @@ from rigtools.calibration.runup_outputs import (
     RunUpResult,
     write_runup_outputs,
 )
-from rigtools.calibration.sampler import (
-    MapEstimate,
-    Progress,
-    SamplerRun,
-    SamplerSettings,
-    run_sampler,
-)
+from rigtools.calibration.runup_summary import runup_summary
+from rigtools.calibration.sampler import Progress, SamplerRun, SamplerSettings, run_sampler
 from rigtools.campaign.manifest import Campaign, load_campaign
 
 __all__ = [
-    "BACKSIDE_PROBABILITY",
     "BLOCK_POINTS",
     "CHECKPOINT_FILE",
-    "MAP_GENERATIONS",
-    "NO_BACKSIDE_STATEMENT",
     "calibrate_runup_data",
     "calibrate_runups",
-    "find_runup_map",
 ]
 
 #: The chains' checkpoint file in ``<outdir>/runup/``.
 CHECKPOINT_FILE: Final = "chains.h5"
-#: Below this posterior probability of a back-side impact the backlash is not identified.
-BACKSIDE_PROBABILITY: Final = 0.05
-#: What the summary says then.
-NO_BACKSIDE_STATEMENT: Final = ("no back-side contact in any posterior draw: the run-up does "
-                                "not identify the backlash")
 #: Neighbouring points per block of the blocked PSIS-LOO check.
 BLOCK_POINTS: Final = 10
-_PRIOR_DRAWS: Final = 20000
-#: Largest number of differential-evolution generations of :func:`find_runup_map`.
-MAP_GENERATIONS: Final = 60
 
 
 def _q(x: np.ndarray) -> dict[str, float] | None:
@@ -148,115 +127,6 @@ def _fingerprint(config: CalibrationConfig, forward: RunUpForward) -> str:
             h.update(np.ascontiguousarray(a, dtype=float).tobytes())
         h.update("\0".join(str(d) for d in c.direction).encode())
     return h.hexdigest()
-
-
-def _fit_warnings(names: tuple[str, ...], run: SamplerRun, summaries: Mapping[str, Any],
-                  tolerances: Tolerances) -> list[str]:
-    """Convergence, R-hat, ESS and acceptance (as the natural-frequency calibration)."""
-    notes = [n for n in run.notes if not n.startswith("walkers stranded")]
-    return notes + sampler_warnings(names, run, summaries, tolerances)
-
-
-def _not_identified(entry: dict[str, Any], statement: str) -> dict[str, Any]:
-    """Null the result fields of a parameter the data do not identify, add the statement."""
-    out = dict(entry)
-    for k in ("mean", "q05", "q50", "q95"):
-        out[k] = None
-    out["identified"] = False
-    out["statement"] = statement
-    return out
-
-
-def _conventions(forward: RunUpForward) -> dict[str, Any]:
-    banks = {c.run_id: b for c, b in zip(forward.curves, forward.banks, strict=True)}
-    first = forward.curves[0].run_id
-    return {
-        "k_ref": "k_ref = s kbar_F0: kbar_F0 is the mean of the error-free FVMS mesh stiffness "
-                 "of the run's pair (load independent), s = mesh_stiffness_scale",
-        "kbar_F0_N_per_m": {r: b.reference_stiffness_N_m for r, b in banks.items()},
-        "m_e": "equivalent mass of the pair on the line of action, m_e = 1 / (r_b1^2/J_1 + "
-               "r_b2^2/J_2), models.geometry.inertia (or the [calibration] override for "
-               "runs on the campaign's gear set)",
-        "equivalent_mass_kg": {r: b.equivalent_mass_kg for r, b in banks.items()},
-        "equivalent_mass_convention": EQUIVALENT_MASS_CONVENTION,
-        "mesh_natural_frequency_Hz": f"sqrt(k_ref / m_e) / 2 pi with run {first}'s pair",
-        "mesh_natural_frequency_Hz@<run>": "sqrt(s k_model(T/s) / m_e) / 2 pi: the model's "
-                                           "own mean stiffness at the run's torque",
-        "zeta": "damping ratio relative to k_ref: c = 2 zeta sqrt(k_ref m_e)",
-        "backlash": "total backlash 2b on the line of action (um)",
-        "observation_model": "Arms_c = G_c (2 pi f_m)^2 sqrt(sum_h h^4 D_h^2), D_h the peak "
-                             "DTE amplitude of mesh harmonic h (m), log-normal error sigma = "
-                             "model_error, log G_c marginalised (prior: gain)",
-        "stiffness_scale": "exact: the model with compliance C/s is the mesh cycle at T/s "
-                           "with k_ref = s kbar_F0",
-    }
-
-
-def find_runup_map(log_prob: Callable[[np.ndarray], np.ndarray], priors: tuple[Prior, ...],
-                   *, population: int, seed: int, generations: int = MAP_GENERATIONS,
-                   keep: int = 4) -> MapEstimate:
-    """MAP by differential evolution, every generation one vectorised call.
-
-    :func:`rigtools.calibration.sampler.find_map` screens 2048 prior draws and runs
-    Nelder-Mead one parameter vector at a time; with a model sweep per evaluation that costs
-    more than the sampling (measured: 60-80 % of a VVMS fit), and prior draws with a small
-    damping ratio settle slowly. Here ``4 population`` prior draws are screened in one call,
-    the best ``population`` evolve by DE/rand/1/bin (``F = 0.7``, ``CR = 0.9``, greedy
-    selection, candidates outside the support rejected) until the population's log posterior
-    spreads less than 0.05 or ``generations`` pass. The best members that are distinct
-    (more than 0.05 prior sd apart) are the optima.
-
-    Parameters
-    ----------
-    log_prob : callable
-        ``(W, D) -> (W,)``.
-    priors : tuple of Prior
-    population : int
-        Members (the sampler's walkers: one generation costs one sampler step).
-    seed : int
-    generations : int
-    keep : int
-        Distinct optima reported.
-
-    Returns
-    -------
-    MapEstimate
-    """
-    rng = np.random.default_rng([seed, 0])
-    d = len(priors)
-    lo = np.array([p.lower for p in priors])
-    hi = np.array([p.upper for p in priors])
-    sd = np.array([max(p.moments()[1], 1e-12) for p in priors])
-    screen = np.column_stack([p.sample(rng, 4 * population) for p in priors])
-    lp = log_prob(screen)
-    order = np.argsort(-np.where(np.isfinite(lp), lp, -np.inf), kind="stable")[:population]
-    pop, plp = screen[order].copy(), lp[order].copy()
-    n = pop.shape[0]
-    for _ in range(generations):
-        if np.all(np.isfinite(plp)) and np.ptp(plp) < 0.05:
-            break
-        idx = np.array([rng.choice(n, 3, replace=False) for _ in range(n)])
-        mutant = pop[idx[:, 0]] + 0.7 * (pop[idx[:, 1]] - pop[idx[:, 2]])
-        cross = rng.random((n, d)) < 0.9
-        cross[np.arange(n), rng.integers(0, d, n)] = True
-        trial = np.where(cross, mutant, pop)
-        inside = np.all((trial >= lo) & (trial <= hi), axis=1)
-        tlp = np.full(n, -np.inf)
-        if inside.any():
-            tlp[inside] = log_prob(trial[inside])
-        better = np.nan_to_num(tlp, nan=-np.inf) > np.nan_to_num(plp, nan=-np.inf)
-        pop[better], plp[better] = trial[better], tlp[better]
-    rank = np.argsort(-np.where(np.isfinite(plp), plp, -np.inf), kind="stable")
-    optima: list[np.ndarray] = []
-    values: list[float] = []
-    for i in rank:
-        if len(optima) >= keep:
-            break
-        if all(np.max(np.abs(pop[i] - o) / sd) > 0.05 for o in optima):
-            optima.append(pop[i])
-            values.append(float(plp[i]))
-    return MapEstimate(theta=optima[0], log_prob=values[0], optima=np.array(optima),
-                       optima_log_prob=np.array(values))
 
 
 def _draws(run: SamplerRun) -> tuple[np.ndarray, np.ndarray]:
@@ -335,8 +205,8 @@ def _fit_model(post: RunUpPosterior, config: CalibrationConfig, *, seed: int, in
     arms_pred = np.concatenate(pred_parts, axis=1).reshape(w, n, -1)
     log_gain = np.concatenate(gains, axis=1).reshape(w, n, -1)
     fit_warn: list[str] = []
-    summary = _summary(post, run, samples, log_gain, tuple(labels), predictive,
-                       float(any_impact.mean()), config.tolerances, fit_warn)
+    summary = runup_summary(post, run, samples, log_gain, tuple(labels), predictive,
+                            float(any_impact.mean()), config.tolerances, fit_warn)
     seconds = time.perf_counter() - t0
     summary["seconds"] = seconds
     return RunUpFit(
@@ -346,112 +216,6 @@ def _fit_model(post: RunUpPosterior, config: CalibrationConfig, *, seed: int, in
         obs_point=np.concatenate(o_pt), gain_labels=tuple(labels),
         predictive=tuple(predictive), summary=summary, warnings=tuple(fit_warn),
         seconds=seconds)
-
-
-def _summary(post: RunUpPosterior, run: SamplerRun, samples: np.ndarray, log_gain: np.ndarray,
-             labels: tuple[str, ...], predictive: list[RunPredictive], p_impact: float,
-             tolerances: Tolerances, warnings_out: list[str]) -> dict[str, Any]:
-    fwd = post.forward
-    full = run.samples()            # ESS and R-hat from every kept draw
-    summaries = {n: summarize(full[..., i], RUNUP_PARAMETERS[n].unit)
-                 for i, n in enumerate(post.names)}
-    warnings_out += _fit_warnings(post.names, run, summaries, tolerances)
-    params: dict[str, Any] = {}
-    identified: dict[str, bool] = {}
-    for n, prior in zip(post.names, post.priors, strict=True):
-        s = summaries[n]
-        prior_sd = prior.moments()[1]
-        ok = s["sd"] is not None and s["sd"] * tolerances.min_narrowing < prior_sd
-        entry = dict(s, identified=bool(ok), prior=prior.describe(), prior_sd=prior_sd,
-                     statement=None)
-        if n == "backlash" and p_impact < BACKSIDE_PROBABILITY:
-            ok = False
-            entry = _not_identified(entry, f"{NO_BACKSIDE_STATEMENT} (posterior probability "
-                                           f"of a back-side impact {p_impact:.3f})")
-            warnings_out.append(f"backlash: {entry['statement']}; its prior "
-                                f"{prior.describe()} um is not a result")
-        elif not ok:
-            entry = _not_identified(entry, (
-                f"the data do not identify {n}: posterior sd {s['sd']:.3g} is not "
-                f"{tolerances.min_narrowing:g} times under the prior's {prior_sd:.3g} "
-                f"({prior.describe()}); the prior is not a result"))
-            warnings_out.append(f"{n}: {entry['statement']}")
-        identified[n] = bool(ok)
-        params[n] = entry
-    for n, v in post.fixed.items():
-        params[n] = {"fixed": v, "unit": RUNUP_PARAMETERS[n].unit, "identified": None,
-                     "statement": f"fixed at {v:g} ([calibration.runup.fixed])"}
-    # derived natural frequencies; identified as the stiffness scale is
-    s_draws = post.unpack(full)["mesh_stiffness_scale"]
-    rng = np.random.default_rng(0)
-    if "mesh_stiffness_scale" in post.names:
-        prior_s = post.priors[post.names.index("mesh_stiffness_scale")].sample(rng, _PRIOR_DRAWS)
-        lo, hi = fwd.scale_range
-        prior_s = prior_s[(prior_s >= lo) & (prior_s <= hi)]
-    else:
-        prior_s = np.full(2, float(post.fixed["mesh_stiffness_scale"]))
-    derived: dict[str, Any] = {}
-    fn = summarize(fwd.natural_frequency_Hz(s_draws), "Hz")
-    fn_prior_sd = float(np.std(fwd.natural_frequency_Hz(prior_s)))
-    s_ok = identified.get("mesh_stiffness_scale", True)
-    fn_ok = s_ok and fn["sd"] is not None and (
-        fn["sd"] * tolerances.min_narrowing < fn_prior_sd or fn_prior_sd == 0.0)
-    derived["mesh_natural_frequency_Hz"] = dict(fn, identified=bool(fn_ok),
-                                                prior_sd=fn_prior_sd)
-    if not fn_ok:
-        derived["mesh_natural_frequency_Hz"] = _not_identified(
-            derived["mesh_natural_frequency_Hz"],
-            "the data do not identify the mesh natural frequency (the stiffness scale)")
-    model_fn = fwd.model_natural_frequency_Hz(s_draws)            # (R, W, n)
-    for r, curve in enumerate(fwd.curves):
-        e = summarize(model_fn[r], "Hz")
-        e = dict(e, identified=bool(fn_ok))
-        name = f"mesh_natural_frequency_Hz@{curve.run_id}"
-        derived[name] = e if fn_ok else _not_identified(e, "not identified (see "
-                                                           "mesh_natural_frequency_Hz)")
-        f_obs = np.asarray(curve.mesh_frequency_Hz)[np.isfinite(curve.observed).any(axis=0)]
-        med = e["q50"]
-        if fn_ok and med is not None and f_obs.size and not (
-                float(f_obs.min()) <= med <= float(f_obs.max())):
-            warnings_out.append(
-                f"run {curve.run_id}: the posterior mesh natural frequency ({med:.0f} Hz) lies "
-                f"outside the measured mesh frequencies [{f_obs.min():.0f}, "
-                f"{f_obs.max():.0f}] Hz: the ramp does not reach the resonance, the fit "
-                "rests on the flank of the curve")
-    gains = {lab: summarize(np.exp(log_gain[..., j]), "1") for j, lab in enumerate(labels)}
-    acc = float(np.mean(run.acceptance_fraction))
-    me = run.map_estimate
-    return {
-        "schema_version": 1,
-        "model": fwd.kind,
-        "converged": bool(run.converged),
-        "parameters": params,
-        "identified": identified,
-        "derived": derived,
-        "gains": gains,
-        "backlash": {
-            "backside_impact_probability": p_impact,
-            "identified": identified.get("backlash"),
-            "statement": (params["backlash"].get("statement")
-                          if "backlash" in params else None),
-        },
-        "runs": {p.run_id: p.to_dict() for p in predictive},
-        "conventions": _conventions(fwd),
-        "sampler": {
-            "walkers": int(run.chain.shape[1]), "n_steps": run.n_steps,
-            "burn_in": run.burn_in, "thin": run.thin,
-            "tau": [float(t) if math.isfinite(t) else None for t in run.tau],
-            "acceptance_fraction": acc,
-            "log_prob_evaluations": run.log_prob_evaluations,
-            "seconds_sampling": run.seconds_sampling, "resumed_from": run.resumed_from,
-            "draws_stored": int(samples.shape[0] * samples.shape[1]),
-            "map": {"theta": {n: float(v) for n, v in zip(post.names, me.theta, strict=True)},
-                    "log_prob": float(me.log_prob)},
-            "notes": list(run.notes),
-        },
-        "warnings": list(warnings_out),
-        "notes": list(post.notes),
-    }
 
 
 def _loo_data(fit: RunUpFit, *, blocked: bool) -> az.InferenceData:

@@ -52,8 +52,8 @@ from typing import Any, Final
 import numpy as np
 import pandas as pd
 
-from rigtools.calibration.config import RunUpSettings
 from rigtools.calibration.errors import CalibrationError
+from rigtools.calibration.runup_config import RunUpSettings
 from rigtools.campaign.manifest import AnalysisSettings, Campaign
 from rigtools.campaign.observe_orders import DIRECTIONS, ramp_directions, step_directions
 

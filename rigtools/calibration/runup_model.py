@@ -21,8 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rigtools.calibration.config import RunUpSettings
 from rigtools.calibration.priors import Prior
+from rigtools.calibration.runup_config import RunUpSettings
 from rigtools.calibration.runup_forward import RunSweep, RunUpForward
 from rigtools.calibration.runup_likelihood import GainPrior, marginal_log_likelihood
 

@@ -36,11 +36,9 @@ from __future__ import annotations
 import csv
 import io
 import json
-import math
 import os
 import warnings
 from dataclasses import dataclass
-from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any, Final
 
@@ -48,7 +46,7 @@ import arviz as az
 import numpy as np
 
 from rigtools.calibration.comparison import ModelComparison
-from rigtools.calibration.outputs import replace_atomically
+from rigtools.calibration.outputs import csv_cell, replace_atomically, rigtools_version
 from rigtools.calibration.runup_model import RunUpPosterior
 from rigtools.calibration.sampler import SamplerRun
 
@@ -270,13 +268,6 @@ class RunUpResult:
                 "seed": self.seed}
 
 
-def _version() -> str:
-    try:
-        return version("rigtools")
-    except PackageNotFoundError:
-        return "unknown"
-
-
 def runup_inference_data(fit: RunUpFit, *, config: dict[str, Any],
                          seed: int) -> az.InferenceData:
     """InferenceData of one fitted model (module notes).
@@ -315,7 +306,7 @@ def runup_inference_data(fit: RunUpFit, *, config: dict[str, Any],
              "burn_in": fit.run.burn_in, "thin": fit.run.thin,
              "tau": json.dumps([float(t) for t in fit.run.tau]),
              "walkers": int(fit.samples.shape[0]), "seed": int(seed),
-             "fixed": json.dumps(post.fixed), "rigtools_version": _version()}
+             "fixed": json.dumps(post.fixed), "rigtools_version": rigtools_version()}
     with warnings.catch_warnings():
         # "more chains than draws": emcee has many walkers and few thinned draws each
         warnings.filterwarnings("ignore", message="More chains")
@@ -344,14 +335,6 @@ def _from_dict(fit: RunUpFit, posterior: dict[str, np.ndarray], observed: np.nda
     )
 
 
-def _cell(v: Any) -> str:
-    if v is None:
-        return ""
-    if isinstance(v, float):
-        return "" if not math.isfinite(v) else repr(v)
-    return str(v)
-
-
 def _comparison_csv(result: RunUpResult) -> str:
     buf = io.StringIO(newline="")
     w = csv.writer(buf)
@@ -360,8 +343,8 @@ def _comparison_csv(result: RunUpResult) -> str:
     block = {} if result.blocked_comparison is None else result.blocked_comparison.variants
     for m in result.models:
         p, b = point.get(m, {}), block.get(m, {})
-        w.writerow([m, *(_cell(p.get(k)) for k in COMPARISON_COLUMNS[1:10]),
-                    *(_cell(b.get(k)) for k in ("elpd_loo", "se", "elpd_diff", "dse",
+        w.writerow([m, *(csv_cell(p.get(k)) for k in COMPARISON_COLUMNS[1:10]),
+                    *(csv_cell(b.get(k)) for k in ("elpd_loo", "se", "elpd_diff", "dse",
                                                 "pareto_k_max"))])
     return buf.getvalue()
 

@@ -54,6 +54,7 @@ from rigtools.plots.runup import RunUpBand, RunUpFigureData, write_runup_figures
 __all__ = [
     "FN_ONLY_KEYS",
     "RUNUP_KEY",
+    "PartOutcome",
     "RunUpOutcome",
     "clear_runup_outputs",
     "figure_data",
@@ -76,8 +77,8 @@ _CHECKPOINT: Final = "chains.h5"
 
 
 @dataclass(frozen=True)
-class RunUpOutcome:
-    """What the run-up part of the calibrate stage did.
+class PartOutcome:
+    """What one part of the calibrate stage did (natural-frequency or run-up calibration).
 
     Attributes
     ----------
@@ -88,6 +89,23 @@ class RunUpOutcome:
         The part's key ("" when skipped).
     reused : bool
     elapsed_s : float
+    """
+
+    status: Literal["ok", "failed", "skipped"]
+    error: str | None
+    key: str
+    reused: bool
+    elapsed_s: float
+
+
+@dataclass(frozen=True)
+class RunUpOutcome(PartOutcome):
+    """What the run-up part of the calibrate stage did.
+
+    Attributes
+    ----------
+    status, error, key, reused, elapsed_s
+        As :class:`PartOutcome`.
     models : tuple of str
         The models fitted (from ``comparison.json``).
     runs : tuple of str
@@ -96,11 +114,6 @@ class RunUpOutcome:
         The run-up calibration's warnings (runs refused, parameters not identified, ...).
     """
 
-    status: Literal["ok", "failed", "skipped"]
-    error: str | None
-    key: str
-    reused: bool
-    elapsed_s: float
     models: tuple[str, ...] = ()
     runs: tuple[str, ...] = ()
     warnings: tuple[str, ...] = ()

@@ -42,7 +42,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
-from typing import Any, Final, Literal
+from typing import Any, Final
 
 from models.errors import ModelError
 from rigtools.calibration import (
@@ -76,6 +76,7 @@ from rigtools.pipeline.run_tasks import (
     read_run_rows,
 )
 from rigtools.pipeline.runup_stage import (
+    PartOutcome,
     RunUpOutcome,
     clear_runup_outputs,
     run_gear_sets,
@@ -228,18 +229,13 @@ def write_observations_table(campaign: Campaign, outdir: Path, tasks: Sequence[R
 
 
 @dataclass(frozen=True)
-class CalibrateOutcome:
+class CalibrateOutcome(PartOutcome):
     """What the calibration stage did.
 
     Attributes
     ----------
-    status : {'ok', 'failed', 'skipped'}
-    error : str or None
-        Why it failed or was skipped.
-    key : str
-        The stage key ("" when skipped).
-    reused : bool
-    elapsed_s : float
+    status, error, key, reused, elapsed_s
+        As :class:`~rigtools.pipeline.runup_stage.PartOutcome` (``key``: the stage key).
     summary : dict or None
         ``calibration/summary.json`` when the stage is ok.
     warnings : tuple of str
@@ -250,11 +246,6 @@ class CalibrateOutcome:
         ``key``, ``reused`` and ``elapsed_s`` above are the natural-frequency part's.
     """
 
-    status: Literal["ok", "failed", "skipped"]
-    error: str | None
-    key: str
-    reused: bool
-    elapsed_s: float
     summary: dict[str, Any] | None = None
     warnings: tuple[str, ...] = ()
     runup: RunUpOutcome | None = None

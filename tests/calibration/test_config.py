@@ -3,25 +3,22 @@
 from __future__ import annotations
 
 import tomllib
+from collections.abc import Callable
 
 import pytest
-from calibration_cases import toml_lines
 
 from models.thermal import SEED_000_CHI
-from rigtools.calibration import PARAMETERS, default_config, parse_calibration_block
+from rigtools.calibration import (
+    PARAMETERS,
+    CalibrationConfig,
+    default_config,
+    parse_calibration_block,
+)
 from rigtools.errors import CampaignError
 from rigtools.schemas import iter_errors
 
+#: The keys and sub-tables of a full ``[calibration]`` block.
 FULL = """\
-[campaign]
-name = "x"
-gear_set = "fzg-c"
-
-[[run]]
-id = "a"
-file = "a.mcap"
-
-[calibration]
 model_variant = "secant_mesh"
 compare_variants = ["secant_mesh", "tangent"]
 thermal_model = "expansion"
@@ -59,12 +56,6 @@ acceptance_range = [0.1, 0.8]
 """
 
 
-def parse(text: str) -> object:
-    doc = tomllib.loads(text)
-    return parse_calibration_block(doc.get("calibration"), source="c.toml",
-                                   line_of=toml_lines(text))
-
-
 def test_no_block_gives_the_documented_defaults() -> None:
     cfg = parse_calibration_block(None, source="c.toml", line_of=lambda k: None)
     assert cfg == default_config()
@@ -79,8 +70,10 @@ def test_no_block_gives_the_documented_defaults() -> None:
     assert cfg.parameter("model_error").prior.describe() == "halfnormal(sd=0.05)"
 
 
-def test_a_full_block_is_resolved() -> None:
-    cfg = parse(FULL)
+def test_a_full_block_is_resolved(
+        campaign_text: Callable[[str], str],
+        parse_campaign_text: Callable[[str], CalibrationConfig]) -> None:
+    cfg = parse_campaign_text(campaign_text(FULL))
     assert (cfg.model_variant, cfg.thermal_model, cfg.jammed_model, cfg.likelihood) == \
         ("secant_mesh", "expansion", "double_flank", "student_t")
     assert cfg.compare_variants == ("secant_mesh", "tangent")
@@ -101,12 +94,8 @@ def test_a_full_block_is_resolved() -> None:
     assert again.to_dict() == cfg.to_dict()
 
 
-def test_the_schema_accepts_the_full_block() -> None:
-    assert iter_errors(tomllib.loads(FULL), "campaign.schema.json") == []
-
-
-def _with(extra: str) -> str:
-    return FULL.split("[calibration]")[0] + "[calibration]\n" + extra
+def test_the_schema_accepts_the_full_block(campaign_text: Callable[[str], str]) -> None:
+    assert iter_errors(tomllib.loads(campaign_text(FULL)), "campaign.schema.json") == []
 
 
 @pytest.mark.parametrize(("block", "line", "pattern"), [
@@ -137,17 +126,19 @@ def _with(extra: str) -> str:
     ("[calibration.tolerances]\nmax_rhat = 1.1\n", 11, r"unknown 'max_rhat'"),
     ("compare_variants = [\"tangent\"]\n", 10, r"headline model_variant 'secant_path'"),
 ])
-def test_errors_name_the_key_and_its_line(block: str, line: int, pattern: str) -> None:
-    text = _with(block)
+def test_errors_name_the_key_and_its_line(
+        block: str, line: int, pattern: str, campaign_text: Callable[[str], str],
+        parse_campaign_text: Callable[[str], CalibrationConfig]) -> None:
+    text = campaign_text(block)
     with pytest.raises(CampaignError, match=pattern) as info:
-        parse(text)
+        parse_campaign_text(text)
     assert str(info.value).startswith(f"c.toml at line {line}: expected "), str(info.value)
 
 
-def test_unknown_keys_are_errors_in_the_schema_too() -> None:
+def test_unknown_keys_are_errors_in_the_schema_too(campaign_text: Callable[[str], str]) -> None:
     for bad in ("walkerz = 40\n", "[calibration.priors]\nbacklsh = {dist = \"uniform\", "
                 "lower = 0.0, upper = 6.0}\n", "[calibration.tolerances]\nmax_rhat = 1.1\n"):
-        assert iter_errors(tomllib.loads(_with(bad)), "campaign.schema.json"), bad
+        assert iter_errors(tomllib.loads(campaign_text(bad)), "campaign.schema.json"), bad
 
 
 def test_every_parameter_has_a_unit_from_the_summary_vocabulary() -> None:

@@ -20,9 +20,10 @@ from sbc_runup import GEAR_SET, Settings, config_for, simulate_curve
 from models.dynamics.walkers import cycle_bank
 from models.geometry import load_gear_set
 from rigtools.calibration import CalibrationError, default_config
-from rigtools.calibration.runup_api import NO_BACKSIDE_STATEMENT, calibrate_runup_data
+from rigtools.calibration.runup_api import calibrate_runup_data
 from rigtools.calibration.runup_data import RunUpData
 from rigtools.calibration.runup_outputs import RUNUP_DIR, RunUpResult
+from rigtools.calibration.runup_summary import NO_BACKSIDE_STATEMENT
 from rigtools.schemas import iter_errors
 
 TRUTH = {"zeta": 0.025, "stiffness_scale": 0.9, "model_error": 0.1,

@@ -3,25 +3,17 @@
 from __future__ import annotations
 
 import tomllib
+from collections.abc import Callable
 
 import pytest
-from calibration_cases import toml_lines
 
-from rigtools.calibration import default_config, parse_calibration_block
-from rigtools.calibration.config import RUNUP_MODELS, RUNUP_PARAMETERS, RunUpSettings
+from rigtools.calibration import CalibrationConfig, default_config, parse_calibration_block
+from rigtools.calibration.runup_config import RUNUP_MODELS, RUNUP_PARAMETERS, RunUpSettings
 from rigtools.errors import CampaignError
 from rigtools.schemas import iter_errors
 
+#: The keys and sub-tables of a full ``[calibration]`` block.
 FULL = """\
-[campaign]
-name = "x"
-gear_set = "fzg-c"
-
-[[run]]
-id = "a"
-file = "a.mcap"
-
-[calibration]
 models = ["fvms", "vvms", "lste"]
 
 [calibration.runup]
@@ -45,12 +37,6 @@ backlash = 136.0
 """
 
 
-def parse(text: str) -> object:
-    doc = tomllib.loads(text)
-    return parse_calibration_block(doc.get("calibration"), source="c.toml",
-                                   line_of=toml_lines(text))
-
-
 def test_defaults_have_no_models_and_the_documented_priors() -> None:
     cfg = default_config()
     assert cfg.models == ()
@@ -68,8 +54,10 @@ def test_defaults_have_no_models_and_the_documented_priors() -> None:
     assert {p.unit for p in RUNUP_PARAMETERS.values()} <= {"1", "um"}
 
 
-def test_a_full_block_is_resolved_and_round_trips() -> None:
-    cfg = parse(FULL)
+def test_a_full_block_is_resolved_and_round_trips(
+        campaign_text: Callable[[str], str],
+        parse_campaign_text: Callable[[str], CalibrationConfig]) -> None:
+    cfg = parse_campaign_text(campaign_text(FULL))
     assert cfg.models == ("fvms", "vvms", "lste")
     ru = cfg.runup
     assert (ru.max_speed_points, ru.min_speed_points, ru.min_span, ru.steps_per_period,
@@ -83,16 +71,13 @@ def test_a_full_block_is_resolved_and_round_trips() -> None:
     assert again.runup.free_parameters == ru.free_parameters
 
 
-def test_the_schema_accepts_the_full_block_and_rejects_unknown_keys() -> None:
-    assert iter_errors(tomllib.loads(FULL), "campaign.schema.json") == []
+def test_the_schema_accepts_the_full_block_and_rejects_unknown_keys(
+        campaign_text: Callable[[str], str]) -> None:
+    assert iter_errors(tomllib.loads(campaign_text(FULL)), "campaign.schema.json") == []
     for bad in ('models = ["itms2"]\n', "[calibration.runup]\nwalkerz = 4\n",
                 "[calibration.runup.priors]\nzeeta = {dist = \"uniform\", lower = 0.0, "
                 "upper = 1.0}\n", "[calibration.runup.fixed]\ngain = 0.01\n"):
-        assert iter_errors(tomllib.loads(_with(bad)), "campaign.schema.json"), bad
-
-
-def _with(extra: str) -> str:
-    return FULL.split("[calibration]")[0] + "[calibration]\n" + extra
+        assert iter_errors(tomllib.loads(campaign_text(bad)), "campaign.schema.json"), bad
 
 
 @pytest.mark.parametrize(("block", "line", "pattern"), [
@@ -121,7 +106,9 @@ def _with(extra: str) -> str:
      r"a fixed backlash that its prior uniform\(0, 50\) "
      r"\(calibration.runup.priors.backlash\) admits, found 136"),
 ])
-def test_errors_name_the_key_and_its_line(block: str, line: int, pattern: str) -> None:
+def test_errors_name_the_key_and_its_line(
+        block: str, line: int, pattern: str, campaign_text: Callable[[str], str],
+        parse_campaign_text: Callable[[str], CalibrationConfig]) -> None:
     with pytest.raises(CampaignError, match=pattern) as info:
-        parse(_with(block))
+        parse_campaign_text(campaign_text(block))
     assert str(info.value).startswith(f"c.toml at line {line}: expected "), str(info.value)

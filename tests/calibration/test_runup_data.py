@@ -14,8 +14,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rigtools.calibration.config import RunUpSettings
 from rigtools.calibration.errors import CalibrationError
+from rigtools.calibration.runup_config import RunUpSettings
 from rigtools.calibration.runup_data import (
     MAX_GAP_FRACTION,
     RunUpCurve,

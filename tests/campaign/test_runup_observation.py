@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rigtools.calibration.config import RunUpSettings
+from rigtools.calibration.runup_config import RunUpSettings
 from rigtools.calibration.runup_data import has_interior_maximum, prepare_runups
 from rigtools.campaign import load_campaign, observe_campaign, validate_observations
 from rigtools.campaign.observe_orders import ramp_directions, step_directions
