@@ -284,23 +284,36 @@ def arms_rows(base: dict[str, Any], rec: Recording, name: str, rms_row: dict[str
                                     "message": "; ".join([*msg, "no whole block of "
                                                           f"{sl.revs_per_block} revolutions"])}))
             continue
-        amp = sl.amplitude[i] * factor
-        if not np.all(np.isfinite(amp)):
-            flags.append("above_passband")
-            msg.append("a mesh harmonic lies above the resampler's passband (NaN)")
-        snr = _order_floor_snr_db(sl, i)
-        if snr is not None and snr < a.low_snr_dB:
-            flags.append("low_snr")
-            msg.append(f"weakest mesh harmonic {snr:.1f} dB over the floor < {a.low_snr_dB:g} dB")
-        f_mesh = float(sl.mesh_frequency_Hz[i])
-        rows.append(row_status({
-            **row, "mesh_frequency_Hz": f_mesh, "direction": directions[i],
-            "step_speed_rpm": float(speed_rpm_from_mesh_frequency(f_mesh, z1)),
-            "a1_m_s2": finite_or_none(amp[0]), "a2_m_s2": finite_or_none(amp[1]),
-            "a3_m_s2": finite_or_none(amp[2]),
-            "arms_m_s2": finite_or_none(sl.arms[i] * factor), "snr_dB": finite_or_none(snr),
-            "message": "; ".join(msg), "_flags": flags}))
+        rows.append(_harmonics_row(row, sl.amplitude[i] * factor, sl.arms[i] * factor,
+                                   _order_floor_snr_db(sl, i), float(sl.mesh_frequency_Hz[i]),
+                                   directions[i], z1, a.low_snr_dB, flags, msg))
     return rows
+
+
+def _harmonics_row(row: dict[str, Any], amp: np.ndarray, arms: float, snr: float | None,
+                   f_mesh: float, direction: str, z1: int, low_snr_dB: float,
+                   flags: list[str], msg: list[str]) -> dict[str, Any]:
+    """An arms row (step or ramp window) completed with its harmonics, Arms and SNR.
+
+    ``row`` holds the columns before the mesh frequency; ``amp`` (m/s^2) the amplitudes of
+    :data:`HARMONICS`, ``arms`` their Arms (m/s^2), ``snr`` the weakest harmonic over the
+    floor (dB); ``f_mesh`` is the mesh frequency (Hz), ``z1`` the pinion's teeth. A NaN
+    amplitude flags ``above_passband``, an SNR under ``low_snr_dB`` ``low_snr``: appended to
+    ``flags`` and ``msg``, which hold the row's flags and messages so far.
+    """
+    if not np.all(np.isfinite(amp)):
+        flags.append("above_passband")
+        msg.append("a mesh harmonic lies above the resampler's passband (NaN)")
+    if snr is not None and snr < low_snr_dB:
+        flags.append("low_snr")
+        msg.append(f"weakest mesh harmonic {snr:.1f} dB over the floor < {low_snr_dB:g} dB")
+    return row_status({
+        **row, "mesh_frequency_Hz": f_mesh, "direction": direction,
+        "step_speed_rpm": float(speed_rpm_from_mesh_frequency(f_mesh, z1)),
+        "a1_m_s2": finite_or_none(amp[0]), "a2_m_s2": finite_or_none(amp[1]),
+        "a3_m_s2": finite_or_none(amp[2]),
+        "arms_m_s2": finite_or_none(arms), "snr_dB": finite_or_none(snr),
+        "message": "; ".join(msg), "_flags": flags})
 
 
 def _ramp_snr_db(rc: RunUpCurve, i: int) -> float | None:
@@ -347,27 +360,13 @@ def _ramp_rows(common: dict[str, Any], rec: Recording, name: str, profile: Speed
     directions = ramp_directions(rc.time_s, rc.mesh_frequency_Hz, a.step_rel_tolerance)
     rows = []
     for i in range(len(rc.time_s)):
-        flags = list(ch_flags)
-        msg = []
-        amp = rc.amplitude[i] * factor
-        if not np.all(np.isfinite(amp)):
-            flags.append("above_passband")
-            msg.append("a mesh harmonic lies above the resampler's passband (NaN)")
-        snr = _ramp_snr_db(rc, i)
-        if snr is not None and snr < a.low_snr_dB:
-            flags.append("low_snr")
-            msg.append(f"weakest mesh harmonic {snr:.1f} dB over the floor < {a.low_snr_dB:g} dB")
         f_mesh = float(rc.mesh_frequency_Hz[i])  # z_tracked n_tracked / 60 = z1 n_pinion / 60
         half = 0.5 * rc.revs_per_window * 60.0 / float(rc.speed_rpm[i])
         t = float(rc.time_s[i]) - t0
-        rows.append(row_status({
-            **common, "segment": "ramp", "step_index": i, "step_start_s": t - half,
-            "step_stop_s": t + half, "n_windows": 1, "n_gaps": 0,
-            "mesh_frequency_Hz": f_mesh, "direction": directions[i],
-            "step_speed_rpm": float(speed_rpm_from_mesh_frequency(f_mesh, z1)),
-            "a1_m_s2": finite_or_none(amp[0]), "a2_m_s2": finite_or_none(amp[1]),
-            "a3_m_s2": finite_or_none(amp[2]),
-            "arms_m_s2": finite_or_none(rc.arms[i] * factor), "snr_dB": finite_or_none(snr),
-            "message": "; ".join(msg), "_flags": flags}))
+        row = {**common, "segment": "ramp", "step_index": i, "step_start_s": t - half,
+               "step_stop_s": t + half, "n_windows": 1, "n_gaps": 0}
+        rows.append(_harmonics_row(row, rc.amplitude[i] * factor, rc.arms[i] * factor,
+                                   _ramp_snr_db(rc, i), f_mesh, directions[i], z1,
+                                   a.low_snr_dB, list(ch_flags), []))
     return rows
 

@@ -88,16 +88,26 @@ def _phase(t: float, lo: int, knot_t: np.ndarray, knot_f: np.ndarray,
 
 
 @njit(cache=True)
-def _restoring(x: float, phi: float, b: float, kd: np.ndarray, ed: np.ndarray, kb: np.ndarray,
-               eb: np.ndarray) -> float:
-    """``sum_j kd_j max(x - ed_j - b, 0) + kb_j min(x - eb_j + b, 0)``, tables linear in phase."""
-    m = kd.shape[0]
+def _cell(phi: float, m: int) -> tuple[int, int, float]:
+    """Table rows either side of phase ``phi`` (cycles) in a table of ``m`` rows per cycle.
+
+    Returns ``(i, i1, w)``: the row at or below, the next one (wrapping), and the weight of
+    ``i1`` (0..1) that interpolates linearly between them.
+    """
     u = (phi - math.floor(phi)) * m
     i = int(u)
     if i >= m:
         i = m - 1
     w = u - i
     i1 = i + 1 if i + 1 < m else 0
+    return i, i1, w
+
+
+@njit(cache=True)
+def _restoring(x: float, phi: float, b: float, kd: np.ndarray, ed: np.ndarray, kb: np.ndarray,
+               eb: np.ndarray) -> float:
+    """``sum_j kd_j max(x - ed_j - b, 0) + kb_j min(x - eb_j + b, 0)``, tables linear in phase."""
+    i, i1, w = _cell(phi, kd.shape[0])
     f = 0.0
     for j in range(kd.shape[1]):
         k_d = (1.0 - w) * kd[i, j] + w * kd[i1, j]
@@ -116,13 +126,7 @@ def _restoring(x: float, phi: float, b: float, kd: np.ndarray, ed: np.ndarray, k
 @njit(cache=True)
 def _offsets(phi: float, ed: np.ndarray, eb: np.ndarray) -> tuple[float, float]:
     """Smallest drive offset and largest back offset at ``phi`` (linear in phase)."""
-    m = ed.shape[0]
-    u = (phi - math.floor(phi)) * m
-    i = int(u)
-    if i >= m:
-        i = m - 1
-    w = u - i
-    i1 = i + 1 if i + 1 < m else 0
+    i, i1, w = _cell(phi, ed.shape[0])
     lo = np.inf
     hi = -np.inf
     for j in range(ed.shape[1]):

@@ -139,44 +139,6 @@ def bench_reader(path: Path, fmt: str, n_frames: int, repeat: int, *,
 
 # -- the mapped layout --------------------------------------------------------------------------
 
-MAPPED_DBC = """VERSION ""
-
-NS_ :
-
-BS_:
-
-BU_: Imu Logger
-
-BO_ 288 IMU: 8 Imu
- SG_ Counter : 0|16@1+ (1,0) [0|65535] "" Logger
- SG_ AccX : 16|16@1- (0.01,0) [-327.68|327.67] "m/s^2" Logger
- SG_ AccY : 32|16@1- (0.01,0) [-327.68|327.67] "m/s^2" Logger
- SG_ AccZ : 48|16@1- (0.01,0) [-327.68|327.67] "m/s^2" Logger
-
-BO_ 768 Rig: 4 Logger
- SG_ OilTemp : 0|16@1+ (0.01,-40) [-40|615.35] "degC" Logger
- SG_ Speed : 16|16@1+ (0.5,0) [0|32767.5] "rpm" Logger
-"""
-
-MAPPED_TOML = "".join(
-    f"""[[uniform]]
-channel = "accel_{axis.lower()}"
-message = "IMU"
-samples = ["Acc{axis}"]
-counter = "Counter"
-sample_rate_Hz = {FS}
-
-""" for axis in "XYZ") + """[[slow]]
-name = "oil_temp"
-message = "Rig"
-signal = "OilTemp"
-
-[[slow]]
-name = "speed"
-message = "Rig"
-signal = "Speed"
-"""
-
 #: Share of frames with identifiers the DBC does not know, and of error and of remote frames.
 UNKNOWN_SHARE = 0.03
 ERROR_SHARE = 0.001
@@ -241,11 +203,15 @@ def write_mapped_recording(folder: Path, seconds: float) -> tuple[dict[str, Path
     the number of all frames (error and remote frames included).
     """
     import can
+    from imu_can_layout import OIL_TEMP_SIGNAL, imu_dbc, imu_mapping
 
     dbc = folder / "mapped.dbc"
-    dbc.write_text(MAPPED_DBC)
+    dbc.write_text(imu_dbc(slow_signals=(
+        OIL_TEMP_SIGNAL, ' SG_ Speed : 16|16@1+ (0.5,0) [0|32767.5] "rpm" Logger')))
     mapping = folder / "mapped.toml"
-    mapping.write_text(MAPPED_TOML)
+    mapping.write_text(imu_mapping({axis: f"accel_{axis.lower()}" for axis in "XYZ"},
+                                   sample_rate_Hz=FS, slow=[("oil_temp", "Rig", "OilTemp"),
+                                                            ("speed", "Rig", "Speed")]))
     messages, n_data = mapped_messages(seconds)
     paths = {"blf": folder / "mapped.blf", "candump": folder / "mapped.log",
              "asc": folder / "mapped.asc"}
@@ -393,4 +359,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
+    # as a script: tests/ (shared test helpers: imu_can_layout) on the path, as under pytest
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
     sys.exit(main())

@@ -28,8 +28,6 @@ References
 
 from __future__ import annotations
 
-import argparse
-import json
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -37,7 +35,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
-from scipy import stats
+from sbc_common import N_RANK_DRAWS, emit_report, parse_cli, rank_coverage
 
 from models.geometry import load_gear_set
 from rigtools.calibration import CalibrationError, calibrate_observations, default_config
@@ -46,8 +44,6 @@ from rigtools.calibration.simulate import simulate_observations
 TORQUES_NM = (20.0, 50.0, 100.0, 183.4, 302.0) * 2
 TEMPERATURES_C = (40.0,) * 5 + (90.0,) * 5
 QUANTITIES = ("backlash", "critical_gap@90C", "margin@90C")
-N_RANK_DRAWS = 99
-N_BINS = 10
 BAND_HZ = (50.0, 16000.0)
 
 
@@ -126,14 +122,12 @@ def check(results: list[dict[str, Any]]) -> dict[str, Any]:
                               "refused": [r["refused"] for r in results if "refused" in r],
                               "not_converged": sum(not r["converged"] for r in fitted)}
     for q in QUANTITIES:
-        ranks = np.array([r[q]["rank"] for r in fitted])
-        counts = np.bincount(ranks * N_BINS // (N_RANK_DRAWS + 1), minlength=N_BINS)
-        chi2 = stats.chisquare(counts)
+        summary = rank_coverage(fitted, q)
         err = np.array([r[q]["median"] - r[q]["truth"] for r in fitted])
         report[q] = {
-            "coverage_90": float(np.mean([r[q]["covered"] for r in fitted])),
-            "rank_counts": counts.tolist(),
-            "chi2_p": float(chi2.pvalue),
+            "coverage_90": summary.coverage_90,
+            "rank_counts": summary.rank_counts.tolist(),
+            "chi2_p": summary.chi2_p,
             "bias": float(np.mean(err)),
             "bias_se": float(np.std(err, ddof=1) / np.sqrt(err.size)) if err.size > 1 else None,
             "mean_posterior_sd": float(np.mean([r[q]["sd"] for r in fitted])),
@@ -143,24 +137,12 @@ def check(results: list[dict[str, Any]]) -> dict[str, Any]:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the SBC from the command line; exit 1 when a check fails."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--n", type=int, default=100)
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--jobs", type=int, default=1)
-    ap.add_argument("--out", default=None)
-    a = ap.parse_args(argv)
+    a = parse_cli(__doc__.splitlines()[0], argv)
     t0 = time.perf_counter()
     results = run(a.n, a.seed, Settings(), a.jobs, verbose=True)
     report = check(results)
     report["seconds"] = time.perf_counter() - t0
-    text = json.dumps({"report": report, "results": results}, indent=1)
-    if a.out:
-        with open(a.out, "w", encoding="utf-8") as fh:
-            fh.write(text)
-    print(json.dumps(report, indent=1))
-    ok = all(0.85 <= report[q]["coverage_90"] <= 0.95 and report[q]["chi2_p"] > 0.01
-             for q in QUANTITIES)
-    return 0 if ok else 1
+    return emit_report(report, results, a.out, QUANTITIES, indent=1)
 
 
 if __name__ == "__main__":

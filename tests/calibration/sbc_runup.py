@@ -29,8 +29,6 @@ References
 
 from __future__ import annotations
 
-import argparse
-import json
 import math
 import sys
 import time
@@ -40,13 +38,13 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
-from scipy import stats
+from sbc_common import N_RANK_DRAWS, emit_report, parse_cli, rank_coverage
 
 from models.dynamics.walkers import cycle_bank, sweep_walkers_reference
 from models.geometry import load_gear_set
 from rigtools.calibration import CalibrationError, default_config
-from rigtools.calibration.config import RunUpSettings
 from rigtools.calibration.runup_api import calibrate_runup_data
+from rigtools.calibration.runup_config import RunUpSettings
 from rigtools.calibration.runup_data import RunUpCurve, RunUpData
 from rigtools.calibration.runup_forward import acceleration_arms
 
@@ -55,8 +53,6 @@ TORQUE_NM = 300.0
 BACKLASH_UM = 136.0
 CHANNELS = ("accel_x", "accel_y", "accel_z")
 QUANTITIES = ("zeta", "mesh_natural_frequency_Hz", "model_error")
-N_RANK_DRAWS = 99
-N_BINS = 10
 
 
 def simulate_curve(kind: str, torque_Nm: float, *, zeta: float, stiffness_scale: float,
@@ -177,31 +173,16 @@ def check(results: list[dict[str, Any]]) -> dict[str, Any]:
                               "refused": [r for r in results if "refused" in r],
                               "converged": sum(bool(r["converged"]) for r in fitted)}
     for q in QUANTITIES:
-        cov = float(np.mean([r[q]["covered"] for r in fitted])) if fitted else math.nan
-        ranks = np.array([r[q]["rank"] for r in fitted])
-        hist = np.histogram(ranks, bins=N_BINS, range=(0, N_RANK_DRAWS + 1))[0]
-        p = float(stats.chisquare(hist).pvalue) if fitted else math.nan
-        report[q] = {"coverage_90": cov, "chi2_p": p, "histogram": hist.tolist()}
+        summary = rank_coverage(fitted, q)
+        report[q] = {"coverage_90": summary.coverage_90, "chi2_p": summary.chi2_p,
+                     "histogram": summary.rank_counts.tolist()}
     return report
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--n", type=int, default=100)
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--jobs", type=int, default=1)
-    ap.add_argument("--out", default=None)
-    a = ap.parse_args(argv)
+    a = parse_cli(__doc__.splitlines()[0], argv)
     results = run(a.n, seed=a.seed, jobs=a.jobs)
-    report = check(results)
-    text = json.dumps({"report": report, "results": results}, indent=2)
-    if a.out:
-        with open(a.out, "w", encoding="utf-8") as fh:
-            fh.write(text)
-    print(json.dumps(report, indent=2))
-    ok = all(0.85 <= report[q]["coverage_90"] <= 0.95 and report[q]["chi2_p"] > 0.01
-             for q in QUANTITIES)
-    return 0 if ok else 1
+    return emit_report(check(results), results, a.out, QUANTITIES, indent=2)
 
 
 if __name__ == "__main__":

@@ -21,6 +21,7 @@ from pathlib import Path
 import can
 import numpy as np
 import pytest
+from imu_can_layout import imu_dbc, imu_mapping
 from make_damaged_corpus import damages_for
 
 from rigtools.errors import RigtoolsError
@@ -33,29 +34,11 @@ from rigtools.ingest.recording import IngestReport
 HEADER = "date Sat Sep 30 15:06:13.191 2017\nbase hex  timestamps absolute\n" \
          "internal events logged\nBegin Triggerblock Sat Sep 30 15:06:13.191 2017\n"
 
-DBC = """VERSION ""
-
-NS_ :
-
-BS_:
-
-BU_: Imu Logger
-
-BO_ 288 IMU: 8 Imu
- SG_ Counter : 0|16@1+ (1,0) [0|65535] "" Logger
- SG_ AccX : 16|16@1- (0.01,0) [-327.68|327.67] "m/s^2" Logger
- SG_ AccY : 32|16@1- (0.01,0) [-327.68|327.67] "m/s^2" Logger
- SG_ AccZ : 48|16@1- (0.01,0) [-327.68|327.67] "m/s^2" Logger
-
-BO_ 768 Rig: 4 Logger
- SG_ OilTemp : 0|16@1+ (0.01,-40) [-40|615.35] "degC" Logger
-"""
+DBC = imu_dbc()
 
 
 def _mapping(axes: str) -> str:
-    return "".join(f'[[uniform]]\nchannel = "accel_{a.lower()}"\nmessage = "IMU"\n'
-                   f'samples = ["Acc{a}"]\ncounter = "Counter"\nsample_rate_Hz = 25600.0\n\n'
-                   for a in axes) + '[[slow]]\nname = "oil"\nmessage = "Rig"\nsignal = "OilTemp"\n'
+    return imu_mapping({a: f"accel_{a.lower()}" for a in axes}, slow=[("oil", "Rig", "OilTemp")])
 
 
 def _messages(n: int = 1500) -> list[can.Message]:

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from imu_can_layout import imu_dbc, imu_mapping
 
 from rigtools.cli import EXIT_UNUSABLE, main
 from rigtools.demo.can_writer import encode_reference_frames, write_can_log
@@ -30,29 +31,12 @@ FS = 25_600.0
 N_FRAMES = 8000
 T0 = 1_700_000_000.0
 CHANNELS = tuple(f"/imu/linear_acceleration.{a}" for a in "xyz")
-DBC = '''VERSION ""
-
-NS_ :
-
-BS_:
-
-BU_: Imu Logger
-
-BO_ 512 IMU_ACCEL: 8 Imu
- SG_ Seq : 0|16@1+ (1,0) [0|65535] "" Logger
- SG_ AccX : 16|16@1- (0.01,0) [-327.68|327.67] "m/s^2" Logger
- SG_ AccY : 32|16@1- (0.01,0) [-327.68|327.67] "m/s^2" Logger
- SG_ AccZ : 48|16@1- (0.01,0) [-327.68|327.67] "m/s^2" Logger
-
-BO_ 768 RIG_STATE: 8 Logger
- SG_ Speed_rpm : 0|16@1+ (0.25,0) [0|16383.75] "rpm" Logger
- SG_ Torque_Nm : 16|16@1- (0.05,0) [-1638.4|1638.35] "N.m" Logger
-'''
-MAPPING = "".join(
-    f'[[uniform]]\nchannel = "{c}"\nmessage = "IMU_ACCEL"\nsamples = ["Acc{a}"]\n'
-    f'counter = "Seq"\nsample_rate_Hz = 25600.0\n\n'
-    for c, a in zip(CHANNELS, "XYZ", strict=True)
-) + '[[slow]]\nname = "PinionSpeed_rpm"\nmessage = "RIG_STATE"\nsignal = "Speed_rpm"\n'
+DBC = imu_dbc(frame_id=512, message="IMU_ACCEL", counter="Seq", slow_message="RIG_STATE",
+              slow_bytes=8, slow_signals=(
+                  ' SG_ Speed_rpm : 0|16@1+ (0.25,0) [0|16383.75] "rpm" Logger',
+                  ' SG_ Torque_Nm : 16|16@1- (0.05,0) [-1638.4|1638.35] "N.m" Logger'))
+MAPPING = imu_mapping(dict(zip("XYZ", CHANNELS, strict=True)), message="IMU_ACCEL", counter="Seq",
+                      slow=[("PinionSpeed_rpm", "RIG_STATE", "Speed_rpm")])
 
 
 def _lost_frames() -> np.ndarray:

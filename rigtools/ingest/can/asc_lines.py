@@ -26,6 +26,7 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
 from rigtools.ingest.can.frames import CanFrameBatch
+from rigtools.ingest.can.text_digits import HEX_VALUE, POW10
 
 __all__ = ["FrameLines", "parse_frame_lines"]
 
@@ -34,13 +35,6 @@ _TOKENS = 14
 #: Longest time stamp token read here (15 digits and the point: an exact float mantissa).
 _TS_WIDTH = 16
 _CH_WIDTH = 5
-
-_HEX = np.full(256, 255, np.uint8)
-for _i, _c in enumerate(b"0123456789ABCDEF"):
-    _HEX[_c] = _i
-for _i, _c in enumerate(b"abcdef"):
-    _HEX[_c] = 10 + _i
-_POW10 = 10 ** np.arange(19, dtype=np.int64)
 
 
 @dataclass(frozen=True)
@@ -122,29 +116,25 @@ def _right_aligned(a: np.ndarray, start: np.ndarray, end: np.ndarray,
     return chars, inside
 
 
+def _odd_lines(a: np.ndarray, nl: np.ndarray) -> np.ndarray:
+    """Lines (indices, repeats possible) holding a byte other than printable ASCII or tab.
+
+    Such a line goes to python-can. ``a`` is the block's bytes, ``nl`` the offsets of its
+    line feeds.
+    """
+    odd = np.flatnonzero((a - np.uint8(32)) > 94)  # not printable ASCII (tab, LF, other)
+    odd = odd[(a[odd] != 9) & (a[odd] != 10)]
+    return np.searchsorted(nl, odd)
+
+
 def _parse_tokens(block: bytes) -> FrameLines:
-    r"""Find and parse the plain classic data-frame lines of a block, token by token.
+    """Find and parse the plain classic data-frame lines of a block, token by token.
 
-    Parameters
-    ----------
-    block : bytes
-        Whole lines, each ending with ``\n`` (carriage returns already turned into line
-        feeds, as the line reader does).
-
-    Returns
-    -------
-    FrameLines
-        One entry per line.
+    Parameters and result as :func:`parse_frame_lines`.
     """
     a = np.frombuffer(block, np.uint8)
     nl = np.flatnonzero(a == 10)
     n = nl.size
-    line_start = np.empty(n, np.int64)
-    if n:
-        line_start[0] = 0
-        line_start[1:] = nl[:-1] + 1
-    # bytes other than printable ASCII and tab: the line goes to python-can
-    odd = np.flatnonzero(((a < 32) & (a != 9) & (a != 10)) | (a > 126))
     sep = (a == 32) | (a == 9) | (a == 10)
     edge = np.flatnonzero(np.diff(sep.view(np.int8), prepend=np.int8(1), append=np.int8(1)))
     # ``edge`` alternates token starts and token ends (a token is a run of non-separators)
@@ -154,8 +144,7 @@ def _parse_tokens(block: bytes) -> FrameLines:
     n_tok = np.diff(before, prepend=0)
     first_tok = before - n_tok
     ok = n_tok >= 6
-    if odd.size:
-        ok[np.searchsorted(nl, odd)] = False
+    ok[_odd_lines(a, nl)] = False
     if not ok.any():
         return _empty(nl)
     rank = np.arange(_TOKENS)
@@ -178,8 +167,8 @@ def _parse_tokens(block: bytes) -> FrameLines:
     col = np.arange(_TS_WIDTH)
     expo = (_TS_WIDTH - 1 - col)[None, :] - (col[None, :] < dot_col[:, None])
     digit = np.where(inside & ~is_dot, digit, 0).astype(np.int64)
-    mantissa = (digit * _POW10[np.maximum(expo, 0)]).sum(axis=1).astype(np.float64)
-    scale = _POW10[np.clip(frac, 0, 18)].astype(np.float64)
+    mantissa = (digit * POW10[np.maximum(expo, 0)]).sum(axis=1).astype(np.float64)
+    scale = POW10[np.clip(frac, 0, 18)].astype(np.float64)
 
     # channel: digits
     ch_len = length[:, 1]
@@ -188,7 +177,7 @@ def _parse_tokens(block: bytes) -> FrameLines:
     digit = chars - np.uint8(48)
     ok &= ~(inside & (digit > 9)).any(axis=1)
     digit = np.where(inside, digit, 0).astype(np.int64)
-    ch_num = digit @ _POW10[_CH_WIDTH - 1 :: -1][:_CH_WIDTH] - 1
+    ch_num = digit @ POW10[_CH_WIDTH - 1 :: -1][:_CH_WIDTH] - 1
     channel = np.where(ch_num <= 32767, ch_num, -1).astype(np.int16)
 
     # identifier: 1..8 hex digits, then an optional x (extended)
@@ -198,7 +187,7 @@ def _parse_tokens(block: bytes) -> FrameLines:
     hex_len = id_len - extended
     ok &= (hex_len >= 1) & (hex_len <= 8)
     chars, inside = _right_aligned(a, s[:, 2], s[:, 2] + hex_len, 8)
-    nib = _HEX[chars]
+    nib = HEX_VALUE[chars]
     ok &= ~(inside & (nib > 15)).any(axis=1)
     nib = np.where(inside, nib, 0).astype(np.int64)
     can_id = np.zeros(n, np.int64)
@@ -220,8 +209,8 @@ def _parse_tokens(block: bytes) -> FrameLines:
     used = rank[6:][None, :] < (6 + dlc)[:, None]
     ds = s[:, 6:]
     ok &= ~(used & (length[:, 6:] != 2)).any(axis=1)
-    hi = _HEX[a[ds]]
-    lo = _HEX[a[np.minimum(ds + 1, a.size - 1)]]
+    hi = HEX_VALUE[a[ds]]
+    lo = HEX_VALUE[a[np.minimum(ds + 1, a.size - 1)]]
     ok &= ~(used & ((hi > 15) | (lo > 15))).any(axis=1)
     data = np.where(used, (hi << 4) | (lo & 15), 0).astype(np.uint8)
     return FrameLines(nl.astype(np.int64), ok, mantissa, scale, channel,
@@ -253,7 +242,7 @@ _SEP, _DIGIT, _HEXC = 0, 1, 2
 _CLASS_TABLE = np.zeros((3, 256), bool)
 _CLASS_TABLE[_SEP, [9, 32]] = True
 _CLASS_TABLE[_DIGIT, np.arange(48, 58)] = True
-_CLASS_TABLE[_HEXC] = _HEX < 16
+_CLASS_TABLE[_HEXC] = HEX_VALUE < 16
 
 
 @dataclass(frozen=True)
@@ -330,7 +319,7 @@ def _valid(c: np.ndarray, lay: _Layout) -> np.ndarray:
     sep = c[:, cls == _SEP]
     bad = ((sep != 32) & (sep != 9)).any(axis=1)
     bad |= ((c[:, cls == _DIGIT] - np.uint8(48)) > 9).any(axis=1)
-    bad |= (_HEX[c[:, cls == _HEXC]] > 15).any(axis=1)
+    bad |= (HEX_VALUE[c[:, cls == _HEXC]] > 15).any(axis=1)
     exact = cls >= 3
     want = np.argmax(lay.table[cls[exact]], axis=1).astype(np.uint8)
     bad |= (c[:, exact] != want).any(axis=1)
@@ -351,7 +340,7 @@ def _parse_layout(rows: np.ndarray, lay: _Layout, out: dict[str, np.ndarray],
     for j in lay.ch_digits:
         ch *= 10
         ch += c[:, j] - np.uint8(48)
-    nib = _HEX[c[:, lay.id_hex]].astype(np.int64)
+    nib = HEX_VALUE[c[:, lay.id_hex]].astype(np.int64)
     can_id = np.zeros(idx.size, np.int64)
     for j in range(nib.shape[1]):
         can_id = (can_id << 4) | (nib[:, j] & 15)
@@ -369,7 +358,7 @@ def _parse_layout(rows: np.ndarray, lay: _Layout, out: dict[str, np.ndarray],
     out["extended"][sel] = lay.extended
     out["length"][sel] = lay.dlc
     if lay.dlc:
-        h = _HEX[c[keep][:, lay.data_hex]] & 15
+        h = HEX_VALUE[c[keep][:, lay.data_hex]] & 15
         out["data"][sel, : lay.dlc] = (h[:, 0::2] << 4) | h[:, 1::2]
     return ok
 
@@ -401,11 +390,7 @@ def parse_frame_lines(block: bytes) -> FrameLines:
     starts[0] = 0
     starts[1:] = nl[:-1] + 1
     lens = nl - starts
-    odd = np.flatnonzero((a - np.uint8(32)) > 94)  # not printable ASCII (tab, LF, other)
-    odd = odd[(a[odd] != 9) & (a[odd] != 10)]
-    if odd.size:
-        lens = lens.copy()
-        lens[np.searchsorted(nl, odd)] = -1  # never grouped
+    lens[_odd_lines(a, nl)] = -1  # never grouped
     out = {"plain": np.zeros(n, bool), "mantissa": np.zeros(n), "scale": np.ones(n),
            "channel": np.zeros(n, np.int16), "can_id": np.zeros(n, np.uint32),
            "extended": np.zeros(n, bool), "length": np.zeros(n, np.uint8),

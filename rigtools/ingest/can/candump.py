@@ -50,6 +50,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 from rigtools.errors import RecordingFormatError
 from rigtools.ingest.can.frames import CanFrameBatch
 from rigtools.ingest.can.reader import CanLogReader
+from rigtools.ingest.can.text_digits import HEX_VALUE, POW10
 from rigtools.ingest.recording import IngestReport
 
 __all__ = ["BLOCK_BYTES", "MAX_LINE_BYTES", "NAME", "READER", "iter_batches", "sniff"]
@@ -63,13 +64,6 @@ MAX_LINE_BYTES = 1 << 16
 
 _CAN_ERR_FLAG = 0x20000000
 _SNIFF = re.compile(rb"\s*\(\s*\d+(\.\d*)?\)\s+\S+\s+[0-9A-Fa-f]{1,8}##?[0-9A-Fa-fRr]?")
-
-_HEXVAL = np.full(256, 255, np.uint8)
-for _i, _c in enumerate(b"0123456789ABCDEF"):
-    _HEXVAL[_c] = _i
-for _i, _c in enumerate(b"abcdef"):
-    _HEXVAL[_c] = 10 + _i
-_POW10 = 10 ** np.arange(19, dtype=np.int64)
 
 # kinds of a parsed line
 _DATA, _ERROR, _REMOTE, _BAD, _BLANK = 0, 1, 2, 3, 4
@@ -389,21 +383,32 @@ def _layout_key(line: bytes) -> int | None:
             | (dl << 19) | (int(suffix) << 27))
 
 
-def _uniform_rows(m: np.ndarray, k: int) -> np.ndarray:
-    """Rows of a character matrix that have the structural characters of layout ``k``.
+def _structural_columns(k: int) -> list[tuple[int, int]]:
+    """Column and character of each structural character of layout ``k`` (``(``, ``.``, ...).
 
-    The matrix is at least as wide as the layout; the rows' other characters are not looked at.
+    The remote-frame ``R`` and the ``R``/``T`` suffix, which come in either case, are not
+    among them.
     """
-    il, fl, cl, idl, fdk, remote, _, suffix, c_chan, c_id, c_data, width = _columns(k)
+    il, fl, cl, idl, fdk, _, _, suffix, c_chan, c_id, _, width = _columns(k)
     cols = [(0, b"("), (1 + il, b"."), (2 + il + fl, b")"), (3 + il + fl, b" "),
             (c_chan + cl, b" "), (c_id + idl, b"#")]
     if fdk:
         cols.append((c_id + idl + 1, b"#"))
     if suffix:
         cols.append((width - 2, b" "))
-    ok = m[:, cols[0][0]] == cols[0][1][0]
+    return [(c, ch[0]) for c, ch in cols]
+
+
+def _uniform_rows(m: np.ndarray, k: int) -> np.ndarray:
+    """Rows of a character matrix that have the structural characters of layout ``k``.
+
+    The matrix is at least as wide as the layout; the rows' other characters are not looked at.
+    """
+    _, _, _, _, _, remote, _, suffix, _, _, c_data, width = _columns(k)
+    cols = _structural_columns(k)
+    ok = m[:, cols[0][0]] == cols[0][1]
     for c, ch in cols[1:]:
-        ok &= m[:, c] == ch[0]
+        ok &= m[:, c] == ch
     if remote:
         ok &= (m[:, c_data] | 0x20) == ord("r")
     if suffix:
@@ -413,17 +418,11 @@ def _uniform_rows(m: np.ndarray, k: int) -> np.ndarray:
 
 def _uniform_ok(m: np.ndarray, k: int) -> bool:
     """All rows of a fixed-width matrix have the structural characters of layout ``k``."""
-    il, fl, cl, idl, fdk, remote, _, suffix, c_chan, c_id, c_data, width = _columns(k)
+    _, _, _, _, _, remote, _, suffix, _, _, c_data, width = _columns(k)
     if m.shape[1] != width:
         return False
-    cols = [(0, b"("), (1 + il, b"."), (2 + il + fl, b")"), (3 + il + fl, b" "),
-            (c_chan + cl, b" "), (c_id + idl, b"#")]
-    if fdk:
-        cols.append((c_id + idl + 1, b"#"))
-    if suffix:
-        cols.append((width - 2, b" "))
-    for c, ch in cols:
-        if not bool((m[:, c] == ch[0]).all()):
+    for c, ch in _structural_columns(k):
+        if not bool((m[:, c] == ch).all()):
             return False
     if remote and not bool(((m[:, c_data] | 0x20) == ord("r")).all()):
         return False
@@ -446,16 +445,16 @@ def _parse_group(m: np.ndarray, k: int, idx: np.ndarray, rows: _Rows,
     il, fl, cl, idl, fdk, remote, dl, _, c_chan, c_id, c_data, _ = _columns(k)
     digits = m[:, 1 : 1 + il] - np.uint8(48)  # wraps below '0': one test catches both sides
     frac = m[:, 2 + il : 2 + il + fl] - np.uint8(48)
-    nib = _HEXVAL[m[:, c_id : c_id + idl]]
+    nib = HEX_VALUE[m[:, c_id : c_id + idl]]
     chan_chars = m[:, c_chan : c_chan + cl]
     checks = [digits > 9, frac > 9, nib > 15, (chan_chars - np.uint8(33)) > 93]
     if fdk:
-        checks.append(_HEXVAL[m[:, c_data - 1 : c_data]] > 15)
+        checks.append(HEX_VALUE[m[:, c_data - 1 : c_data]] > 15)
     hexd = np.zeros((m.shape[0], 0), np.uint8)
     if remote:
         checks.append((m[:, c_data + 1 : c_data + dl] - np.uint8(48)) > 9)
     elif dl:
-        hexd = _HEXVAL[m[:, c_data : c_data + dl]]
+        hexd = HEX_VALUE[m[:, c_data : c_data + dl]]
         checks.append(hexd > 15)
     good: np.ndarray | None = None
     for c in checks:
@@ -478,8 +477,8 @@ def _parse_group(m: np.ndarray, k: int, idx: np.ndarray, rows: _Rows,
         rows.kind[idx] = np.where(err, _ERROR, _REMOTE) if any_err else _REMOTE
         return back
     rows.kind[idx] = np.where(err, _ERROR, _DATA) if any_err else _DATA
-    total = (digits.astype(np.int64) @ _POW10[il - 1 :: -1][:il]) * _POW10[fl] + (
-        frac.astype(np.int64) @ _POW10[fl - 1 :: -1][:fl])
+    total = (digits.astype(np.int64) @ POW10[il - 1 :: -1][:il]) * POW10[fl] + (
+        frac.astype(np.int64) @ POW10[fl - 1 :: -1][:fl])
     ts = total.astype(np.float64) / float(10**fl)
     huge = total >= (1 << 53)
     if huge.any():  # beyond exact integers: let float() round the text as python-can does
