@@ -132,6 +132,14 @@ def _step(x, v, j, zeta, force, b, kd, ed, kb, eb, h):  # pragma: no cover - com
 
 
 @njit(cache=True)
+def _period(x, v, zeta, force, b, kd, ed, kb, eb, h):  # pragma: no cover - compiled
+    """One mesh period of :func:`_step` from ``(x, v)``; returns the state at its end."""
+    for j in range(kd.shape[0] // 2):
+        x, v = _step(x, v, j, zeta, force, b, kd, ed, kb, eb, h)
+    return x, v
+
+
+@njit(cache=True)
 def periods_kernel(
     x, v, zeta, force, b, kd, ed, kb, eb, doff, h, n_periods, xs, us
 ):  # pragma: no cover - compiled
@@ -220,7 +228,6 @@ def settle_kernel(
 
     Returns ``(x, v, periods run, period)``, period ``-n`` when unresolved at the cap.
     """
-    n = kd.shape[0] // 2
     m = ring.shape[0]
     for i in range(m):
         ring[i, 0] = np.nan
@@ -230,8 +237,7 @@ def settle_kernel(
     count = 0
     period = 0
     while count < max_periods:
-        for j in range(n):
-            x, v = _step(x, v, j, zeta, force, b, kd, ed, kb, eb, h)
+        x, v = _period(x, v, zeta, force, b, kd, ed, kb, eb, h)
         count += 1
         ring[count % m, 0] = x
         ring[count % m, 1] = v
@@ -313,22 +319,54 @@ def _steady(
     poinc,
     amps,
 ):  # pragma: no cover - compiled
-    """Settle, then record; fills ``poinc`` ``(K, 2)`` and ``amps`` ``(3,)``.
+    """Settle (:func:`settle_kernel`), then record (:func:`_record`); fills ``poinc``, ``amps``.
 
-    ``poinc`` gets the last ``K`` Poincare points, oldest first.
+    At least ``record_periods`` periods are recorded, a whole number of response periods.
+    ``poinc`` ``(K, 2)`` gets the last ``K`` Poincare points, oldest first.
 
     Returns ``(x, v, periods to settle, period, mean, loss, impact, partial)``, ``partial``
     the fraction of recorded step starts with ``0 < touching pairs < npair``.
     """
-    n = kd.shape[0] // 2
-    n2 = 2 * n
-    m = ring.shape[0]
     x, v, count, period = settle_kernel(
         x, v, zeta, force, b, kd, ed, kb, eb, h, tol, min_periods, max_periods, ring
     )
     rec = record_periods
     if period > 0 and rec % period != 0:
         rec = (rec // period + 1) * period
+    x, v, mean, loss, impact, partial, _, _ = _record(
+        x, v, zeta, force, b, kd, ed, kb, eb, doff, boff, npair, cs, sn, h, rec, ring, count, amps
+    )
+    count += rec
+    m = ring.shape[0]
+    k = poinc.shape[0]
+    for i in range(k):  # oldest first
+        c = (count - k + 1 + i) % m
+        poinc[i, 0] = ring[c, 0]
+        poinc[i, 1] = ring[c, 1]
+    return x, v, count - rec, period, mean, loss, impact, partial
+
+
+@njit(cache=True)
+def _record(
+    x, v, zeta, force, b, kd, ed, kb, eb, doff, boff, npair, cs, sn, h, periods, ring, count,
+    amps,
+):  # pragma: no cover - compiled
+    """Run and record ``periods`` mesh periods from ``(x, v)``; fills ``amps`` ``(3,)``.
+
+    ``amps``: peak amplitudes of mesh harmonics 1-3 (DFT of ``x`` at the step starts). The
+    Poincare point after each period goes to ``ring`` at the running count mod its rows
+    (``count`` the periods run before). Contact flags: every step checked on the cubic Hermite
+    interpolant (:func:`_min_below`), the drive side against the offsets ``doff`` (loss: no
+    pair touches where ``x - doff < b``), the back side against ``boff`` (impact:
+    ``x - boff < -b``).
+
+    Returns ``(x, v, mean, loss, impact, partial, x range, v range)`` at the end: ``mean`` of
+    ``x`` and ``partial`` the fraction of step starts with ``0 < touching pairs < npair``; the
+    ranges (max - min over the step ends) size the walkers' continuation guard.
+    """
+    n = kd.shape[0] // 2
+    n2 = 2 * n
+    m = ring.shape[0]
     c1 = 0.0
     c2 = 0.0
     c3 = 0.0
@@ -339,7 +377,11 @@ def _steady(
     loss = False
     impact = False
     partial = 0
-    for _ in range(rec):
+    xlo = x
+    xhi = x
+    vlo = v
+    vhi = v
+    for _ in range(periods):
         for j in range(n):
             touching = 0
             for p in range(kd.shape[1]):
@@ -366,19 +408,18 @@ def _steady(
                 if _min_below(x, v, xn, vn, h, boff[j0], boff[j0 + 1], boff[j2]) < -b:
                     impact = True
             x, v = xn, vn
+            xlo = min(xlo, x)
+            xhi = max(xhi, x)
+            vlo = min(vlo, v)
+            vhi = max(vhi, v)
         count += 1
         ring[count % m, 0] = x
         ring[count % m, 1] = v
-    size = rec * n
+    size = periods * n
     amps[0] = 2.0 * math.sqrt(c1 * c1 + s1 * s1) / size
     amps[1] = 2.0 * math.sqrt(c2 * c2 + s2 * s2) / size
     amps[2] = 2.0 * math.sqrt(c3 * c3 + s3 * s3) / size
-    k = poinc.shape[0]
-    for i in range(k):  # oldest first
-        c = (count - k + 1 + i) % m
-        poinc[i, 0] = ring[c, 0]
-        poinc[i, 1] = ring[c, 1]
-    return x, v, count - rec, period, total / size, loss, impact, partial / size
+    return x, v, total / size, loss, impact, partial / size, xhi - xlo, vhi - vlo
 
 
 @njit(cache=True)
@@ -527,21 +568,10 @@ def sweep_many_kernel(
         )
 
 
-# --- walker-vectorised sweeps (models.dynamics.walkers) ----------------------------------------
-#: Newton iterations per point before :func:`walker_sweep_kernel` falls back to settling.
-WALKER_NEWTON: Final = 8
+# --- walker-vectorised sweeps (models.dynamics.walkers, which sets the method's parameters) -----
 #: Fraction of the linearised decrease of the orbit's Lyapunov function that one plain period
 #: from the entry state must achieve for a Newton orbit to be accepted (see walkers.py).
 _BASIN_DECREASE: Final = 0.5
-#: Continuation guard of the walker shooting: a Newton orbit's Poincare point must lie within
-#: ``WALKER_GUARD`` times the previous orbit's range (per coordinate) of the entry state, plus
-#: ``WALKER_GUARD_FLOOR`` (units of ``L``).
-WALKER_GUARD: Final = 0.5
-WALKER_GUARD_FLOOR: Final = 1e-3
-#: Plain periods of the transient the basin check may follow, and the consecutive periods that
-#: must pass it there (see :func:`_shoot`).
-WALKER_BASIN_PERIODS: Final = 8
-WALKER_BASIN_REPEATS: Final = 2
 
 
 @njit(cache=True)
@@ -601,8 +631,14 @@ def _walker_tables(log_nodes, kbank, ebank, bbank, log_s, eps, kd, ed, kb, eb): 
 
 
 @njit(cache=True)
-def _acc_tangent(x, v, j, zeta, force, b, kd, ed, kb, eb):  # pragma: no cover - compiled
-    """Acceleration and tangent stiffness ``d(contact force)/dx`` of a one-column model."""
+def _tangent_rhs(y, j, zeta, force, b, kd, ed, kb, eb):  # pragma: no cover - compiled
+    """Right-hand side of the state and its 2 x 2 variational equations (one-column model).
+
+    ``y = (x, x', p11, p12, p21, p22)``: ``x'' = F - 2 zeta x' - f(x)`` as in :func:`_accel`
+    at half step ``j`` (column 0 only) and ``P' = [[0, 1], [-f'(x), -2 zeta]] P``, ``f'`` the
+    tangent stiffness ``d(contact force)/dx``.
+    """
+    x = y[0]
     u = x - ed[j, 0]
     w = x - eb[j, 0]
     f = 0.0
@@ -613,7 +649,34 @@ def _acc_tangent(x, v, j, zeta, force, b, kd, ed, kb, eb):  # pragma: no cover -
     if w < -b:
         f += kb[j, 0] * (w + b)
         kk += kb[j, 0]
-    return force - 2.0 * zeta * v - f, kk
+    tz = 2.0 * zeta
+    return (
+        y[1], force - 2.0 * zeta * y[1] - f,
+        y[4], y[5], -kk * y[2] - tz * y[4], -kk * y[3] - tz * y[5],
+    )
+
+
+@njit(cache=True)
+def _stage(y, c, k):  # pragma: no cover - compiled
+    """``y + c k`` for the 6-tuples of :func:`_tangent_rhs` (an RK4 stage's argument)."""
+    return (
+        y[0] + c * k[0], y[1] + c * k[1], y[2] + c * k[2],
+        y[3] + c * k[3], y[4] + c * k[4], y[5] + c * k[5],
+    )
+
+
+@njit(cache=True)
+def _rk4_update(y, h, k1, k2, k3, k4):  # pragma: no cover - compiled
+    """``y + h (k1 + 2 k2 + 2 k3 + k4) / 6`` for the 6-tuples of :func:`_tangent_rhs`."""
+    g = h / 6.0
+    return (
+        y[0] + g * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]),
+        y[1] + g * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]),
+        y[2] + g * (k1[2] + 2.0 * k2[2] + 2.0 * k3[2] + k4[2]),
+        y[3] + g * (k1[3] + 2.0 * k2[3] + 2.0 * k3[3] + k4[3]),
+        y[4] + g * (k1[4] + 2.0 * k2[4] + 2.0 * k3[4] + k4[4]),
+        y[5] + g * (k1[5] + 2.0 * k2[5] + 2.0 * k3[5] + k4[5]),
+    )
 
 
 @njit(cache=True)
@@ -624,58 +687,15 @@ def _period_monodromy(x, v, zeta, force, b, kd, ed, kb, eb, h):  # pragma: no co
     ``(x, v, m11, m12, m21, m22)`` with ``M`` the monodromy matrix of the discrete map.
     """
     n2 = kd.shape[0]
-    n = n2 // 2
-    p11, p12, p21, p22 = 1.0, 0.0, 0.0, 1.0
-    tz = 2.0 * zeta
-    for j in range(n):
+    y = (x, v, 1.0, 0.0, 0.0, 1.0)
+    for j in range(n2 // 2):
         j0 = 2 * j
-        j1 = j0 + 1
-        j2 = (j0 + 2) % n2
-        a1, k1 = _acc_tangent(x, v, j0, zeta, force, b, kd, ed, kb, eb)
-        q11 = p21
-        q12 = p22
-        q21 = -k1 * p11 - tz * p21
-        q22 = -k1 * p12 - tz * p22
-        x2 = x + 0.5 * h * v
-        v2 = v + 0.5 * h * a1
-        r11 = p11 + 0.5 * h * q11
-        r12 = p12 + 0.5 * h * q12
-        r21 = p21 + 0.5 * h * q21
-        r22 = p22 + 0.5 * h * q22
-        a2, k2 = _acc_tangent(x2, v2, j1, zeta, force, b, kd, ed, kb, eb)
-        s11 = r21
-        s12 = r22
-        s21 = -k2 * r11 - tz * r21
-        s22 = -k2 * r12 - tz * r22
-        x3 = x + 0.5 * h * v2
-        v3 = v + 0.5 * h * a2
-        t11 = p11 + 0.5 * h * s11
-        t12 = p12 + 0.5 * h * s12
-        t21 = p21 + 0.5 * h * s21
-        t22 = p22 + 0.5 * h * s22
-        a3, k3 = _acc_tangent(x3, v3, j1, zeta, force, b, kd, ed, kb, eb)
-        u11 = t21
-        u12 = t22
-        u21 = -k3 * t11 - tz * t21
-        u22 = -k3 * t12 - tz * t22
-        x4 = x + h * v3
-        v4 = v + h * a3
-        w11 = p11 + h * u11
-        w12 = p12 + h * u12
-        w21 = p21 + h * u21
-        w22 = p22 + h * u22
-        a4, k4 = _acc_tangent(x4, v4, j2, zeta, force, b, kd, ed, kb, eb)
-        z11 = w21
-        z12 = w22
-        z21 = -k4 * w11 - tz * w21
-        z22 = -k4 * w12 - tz * w22
-        x = x + h / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4)
-        v = v + h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-        p11 = p11 + h / 6.0 * (q11 + 2.0 * s11 + 2.0 * u11 + z11)
-        p12 = p12 + h / 6.0 * (q12 + 2.0 * s12 + 2.0 * u12 + z12)
-        p21 = p21 + h / 6.0 * (q21 + 2.0 * s21 + 2.0 * u21 + z21)
-        p22 = p22 + h / 6.0 * (q22 + 2.0 * s22 + 2.0 * u22 + z22)
-    return x, v, p11, p12, p21, p22
+        k1 = _tangent_rhs(y, j0, zeta, force, b, kd, ed, kb, eb)
+        k2 = _tangent_rhs(_stage(y, 0.5 * h, k1), j0 + 1, zeta, force, b, kd, ed, kb, eb)
+        k3 = _tangent_rhs(_stage(y, 0.5 * h, k2), j0 + 1, zeta, force, b, kd, ed, kb, eb)
+        k4 = _tangent_rhs(_stage(y, h, k3), (j0 + 2) % n2, zeta, force, b, kd, ed, kb, eb)
+        y = _rk4_update(y, h, k1, k2, k3, k4)
+    return y
 
 
 @njit(cache=True)
@@ -706,55 +726,6 @@ def _lyapunov_form(a, b, c, d):  # pragma: no cover - compiled
     p22 = (m00 * (m11 * 1.0 - 0.0 * m21) - m01 * (m10 * 1.0 - 0.0 * m20)
            + 1.0 * (m10 * m21 - m11 * m20)) / det
     return p11, p12, p22
-
-
-@njit(cache=True)
-def _record_one(x, v, zeta, force, b, kd, ed, kb, eb, cs, sn, h, amps):  # pragma: no cover
-    """One period recorded from ``(x, v)``: ``amps`` (DFT of harmonics 1-3), contact flags.
-
-    Returns ``(x, v, loss, impact, x range, v range)`` at the period's end; the flags as
-    :func:`_steady`'s (cubic Hermite check of every step, offsets ``ed``, ``eb`` of the single
-    column); the ranges (max - min over the step ends) size the continuation guard.
-    """
-    n = kd.shape[0] // 2
-    n2 = 2 * n
-    c1 = 0.0
-    c2 = 0.0
-    c3 = 0.0
-    s1 = 0.0
-    s2 = 0.0
-    s3 = 0.0
-    loss = False
-    impact = False
-    xlo = x
-    xhi = x
-    vlo = v
-    vhi = v
-    for j in range(n):
-        c1 += x * cs[0, j]
-        c2 += x * cs[1, j]
-        c3 += x * cs[2, j]
-        s1 += x * sn[0, j]
-        s2 += x * sn[1, j]
-        s3 += x * sn[2, j]
-        xn, vn = _step(x, v, j, zeta, force, b, kd, ed, kb, eb, h)
-        j0 = 2 * j
-        j2 = (j0 + 2) % n2
-        if not loss:
-            if _min_below(x, v, xn, vn, h, ed[j0, 0], ed[j0 + 1, 0], ed[j2, 0]) < b:
-                loss = True
-        if not impact:
-            if _min_below(x, v, xn, vn, h, eb[j0, 0], eb[j0 + 1, 0], eb[j2, 0]) < -b:
-                impact = True
-        x, v = xn, vn
-        xlo = min(xlo, x)
-        xhi = max(xhi, x)
-        vlo = min(vlo, v)
-        vhi = max(vhi, v)
-    amps[0] = 2.0 * math.sqrt(c1 * c1 + s1 * s1) / n
-    amps[1] = 2.0 * math.sqrt(c2 * c2 + s2 * s2) / n
-    amps[2] = 2.0 * math.sqrt(c3 * c3 + s3 * s3) / n
-    return x, v, loss, impact, xhi - xlo, vhi - vlo
 
 
 @njit(cache=True)
@@ -800,7 +771,6 @@ def _shoot(
     settling fallback continues from (the entry state, or the transient's state after the
     periods followed); periods counted as plain-period equivalents (a variational period as 2).
     """
-    n = kd.shape[0] // 2
     xs = x
     vs = v
     cost = 0
@@ -841,8 +811,7 @@ def _shoot(
                 dx = xa - xs
                 dv = va - vs
                 qa = _lyapunov_value(p11, p12, p22, dx, dv)
-                for j in range(n):
-                    xa, va = _step(xa, va, j, zeta, force, b, kd, ed, kb, eb, h)
+                xa, va = _period(xa, va, zeta, force, b, kd, ed, kb, eb, h)
                 cost += 1
                 if not (math.isfinite(xa) and math.isfinite(va)):
                     return False, x, v, cost
@@ -895,8 +864,9 @@ def _walker_path(
                 basin_repeats,
             )
         if ok:
-            x, v, lo, im, rx, rv = _record_one(
-                xs, vs, zeta, force, b, kd, ed, kb, eb, cs, sn, h, amps[i]
+            x, v, _mu, lo, im, _pa, rx, rv = _record(
+                xs, vs, zeta, force, b, kd, ed, kb, eb, ed[:, 0], eb[:, 0], npair, cs, sn, h, 1,
+                ring, 0, amps[i],
             )
             loss[i] = lo
             impact[i] = im

@@ -96,20 +96,14 @@ checked on its cubic Hermite interpolant). ``method="integrate"`` settles every 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from typing import Final
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from models.dynamics.sdof import SDOFModel, sdof_from_mesh_cycle
-from models.dynamics.sdof_kernels import (
-    WALKER_BASIN_PERIODS,
-    WALKER_BASIN_REPEATS,
-    WALKER_GUARD,
-    WALKER_GUARD_FLOOR,
-    WALKER_NEWTON,
-    walker_sweep_kernel,
-)
+from models.dynamics.sdof_kernels import walker_sweep_kernel
 from models.dynamics.sweep import sweep
 from models.errors import ModelError
 from models.geometry.gear_pair import GearPair
@@ -138,6 +132,17 @@ __all__ = [
 KINDS = ("fvms", "vvms", "lste")
 #: ``method`` values of :func:`sweep_walkers`.
 METHODS = ("auto", "shooting", "integrate")
+#: Newton iterations per point before the kernel falls back to settling.
+WALKER_NEWTON: Final = 8
+#: Continuation guard of the shooting: a Newton orbit's Poincare point must lie within
+#: ``WALKER_GUARD`` times the previous orbit's range (per coordinate) of the entry state, plus
+#: ``WALKER_GUARD_FLOOR`` (units of ``L``).
+WALKER_GUARD: Final = 0.5
+WALKER_GUARD_FLOOR: Final = 1e-3
+#: Plain periods of the transient the basin check may follow, and the consecutive periods that
+#: must pass it there (item 4 of the module notes).
+WALKER_BASIN_PERIODS: Final = 8
+WALKER_BASIN_REPEATS: Final = 2
 
 
 @dataclass(frozen=True, eq=False)
@@ -363,6 +368,18 @@ class WalkerSweep:
     periods_run: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=np.int64))
 
 
+def _zero_sweep(shape: tuple[int, ...]) -> WalkerSweep:
+    """A :class:`WalkerSweep` of ``shape`` ``(W, N)`` with zeroed arrays, to be filled."""
+    return WalkerSweep(
+        amplitude_m=np.zeros((*shape, 3)),
+        contact_loss=np.zeros(shape, dtype=np.bool_),
+        backside_impact=np.zeros(shape, dtype=np.bool_),
+        converged=np.zeros(shape, dtype=np.bool_),
+        newton_fraction=0.0,
+        periods_run=np.zeros(shape, dtype=np.int64),
+    )
+
+
 def _walker_inputs(
     bank: CycleBank, mesh_frequency_Hz: ArrayLike, zeta: ArrayLike, stiffness_scale: ArrayLike,
     fluctuation_scale: ArrayLike, backlash_m: ArrayLike,
@@ -439,13 +456,8 @@ def sweep_walkers(
     _, z, s, e, b, lam = _walker_inputs(bank, mesh_frequency_Hz, zeta, stiffness_scale,
                                         fluctuation_scale, backlash_m)
     kbank, ebank, bbank, cs, sn = bank.tables(steps_per_period)
-    W, N = lam.shape
-    amps = np.zeros((W, N, 3))
-    loss = np.zeros((W, N), dtype=np.bool_)
-    impact = np.zeros((W, N), dtype=np.bool_)
-    conv = np.zeros((W, N), dtype=np.bool_)
-    newton = np.zeros((W, N), dtype=np.bool_)
-    runs = np.zeros((W, N), dtype=np.int64)
+    out = _zero_sweep(lam.shape)
+    newton = np.zeros(lam.shape, dtype=np.bool_)
     L = bank.length_scale_m
     force = np.ascontiguousarray(bank.load_N / (s * bank.reference_stiffness_N_m * L))
     walker_sweep_kernel(
@@ -453,9 +465,10 @@ def sweep_walkers(
         np.ascontiguousarray(np.log(s)), e, z, force, np.ascontiguousarray(0.5 * b / L), lam,
         cs, sn, float(tol), bool(shoot), WALKER_NEWTON, int(min_periods), int(max_periods),
         WALKER_GUARD, WALKER_GUARD_FLOOR, WALKER_BASIN_PERIODS, WALKER_BASIN_REPEATS,
-        amps, loss, impact, conv, newton, runs,
+        out.amplitude_m, out.contact_loss, out.backside_impact, out.converged, newton,
+        out.periods_run,
     )
-    return WalkerSweep(amps * L, loss, impact, conv, float(newton.mean()), runs)
+    return replace(out, amplitude_m=out.amplitude_m * L, newton_fraction=float(newton.mean()))
 
 
 def sweep_walkers_reference(
@@ -486,23 +499,18 @@ def sweep_walkers_reference(
     """
     _, z, s, e, b, lam = _walker_inputs(bank, mesh_frequency_Hz, zeta, stiffness_scale,
                                         fluctuation_scale, backlash_m)
-    W, N = lam.shape
-    amps = np.zeros((W, N, 3))
-    loss = np.zeros((W, N), dtype=np.bool_)
-    impact = np.zeros((W, N), dtype=np.bool_)
-    conv = np.zeros((W, N), dtype=np.bool_)
-    runs = np.zeros((W, N), dtype=np.int64)
-    for w in range(W):
+    out = _zero_sweep(lam.shape)
+    for w in range(lam.shape[0]):
         model = bank.walker_model(z[w], s[w], e[w], b[w])
         r = sweep(model, lam[w], steps_per_period=steps_per_period, tol=tol,
                   min_periods=min_periods, max_periods=max_periods,
                   record_periods=record_periods)
-        amps[w] = r.amplitudes * r.length_scale_m
-        loss[w] = r.contact_loss
-        impact[w] = r.backside_impact
-        conv[w] = r.converged
-        runs[w] = r.periods
-    return WalkerSweep(amps, loss, impact, conv, 0.0, runs)
+        out.amplitude_m[w] = r.amplitudes * r.length_scale_m
+        out.contact_loss[w] = r.contact_loss
+        out.backside_impact[w] = r.backside_impact
+        out.converged[w] = r.converged
+        out.periods_run[w] = r.periods
+    return out
 
 
 @dataclass(frozen=True)
