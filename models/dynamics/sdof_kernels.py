@@ -572,6 +572,12 @@ def sweep_many_kernel(
 #: Fraction of the linearised decrease of the orbit's Lyapunov function that one plain period
 #: from the entry state must achieve for a Newton orbit to be accepted (see walkers.py).
 _BASIN_DECREASE: Final = 0.5
+#: Fraction of its entry value the Lyapunov function must have fallen to before the orbit is
+#: accepted (decrease alone let entry states beyond the basin boundary through) ...
+_BASIN_CONTRACTION: Final = 0.1
+#: ... unless the entry state lies within this fraction of the continuation guard of the orbit
+#: (a small step of the path: the linear neighbourhood), where one period's decrease suffices.
+_BASIN_NEAR: Final = 0.05
 
 
 @njit(cache=True)
@@ -801,7 +807,9 @@ def _shoot(
                 return False, x, v, cost
             q0 = _lyapunov_value(p11, p12, p22, d0x, d0v)
             q1 = _lyapunov_value(p11, p12, p22, x1 - xs, v1 - vs)
-            if q1 <= q0 - _BASIN_DECREASE * (d0x * d0x + d0v * d0v):
+            near = (abs(d0x) <= _BASIN_NEAR * guard_x and abs(d0v) <= _BASIN_NEAR * guard_v)
+            if (q1 <= q0 - _BASIN_DECREASE * (d0x * d0x + d0v * d0v)
+                    and (near or q1 <= _BASIN_CONTRACTION * q0)):
                 return True, xs, vs, cost
             # follow the physical transient from P(y0), one plain period at a time
             xa = x1
@@ -818,7 +826,7 @@ def _shoot(
                 qb = _lyapunov_value(p11, p12, p22, xa - xs, va - vs)
                 if qb <= qa - _BASIN_DECREASE * (dx * dx + dv * dv):
                     good += 1
-                    if good >= basin_repeats:
+                    if good >= basin_repeats and qb <= _BASIN_CONTRACTION * q0:
                         return True, xs, vs, cost
                 else:
                     good = 0

@@ -22,12 +22,12 @@ Steps (issue 20):
    (:mod:`~rigtools.calibration.runup_forward`), the log posterior with the gains
    marginalised (:mod:`~rigtools.calibration.runup_model`), the MAP by vectorised
    differential evolution (:func:`~rigtools.calibration.runup_map.find_runup_map`) and emcee
-   to the
-   autocorrelation rule with the unchanged :func:`~rigtools.calibration.sampler.run_sampler`,
+   to the autocorrelation rule with the unchanged :func:`~rigtools.calibration.sampler.run_sampler`,
    resumable from ``<outdir>/runup/chains.h5`` (group ``runup-<model>``).
 3. From at most :data:`~rigtools.calibration.runup_outputs.MAX_STORED_DRAWS` posterior draws:
    the gains drawn from their exact conditional, the pointwise log-likelihood per (run,
-   channel, point), the posterior predictive Arms bands and the jump frequencies.
+   point) with its channels together (they share the model error), the posterior predictive
+   Arms bands and the jump frequencies.
 4. Summary per model (:func:`~rigtools.calibration.runup_summary.runup_summary`): every
    parameter with its quantiles, ESS, R-hat and ``identified`` (posterior sd under the prior
    sd divided by ``[calibration.tolerances] min_narrowing``); a parameter the data do not
@@ -160,22 +160,27 @@ def _fit_model(post: RunUpPosterior, config: CalibrationConfig, *, seed: int, in
     m = w * n
     flat = samples.reshape(m, d)
     p = post.unpack(flat)
-    sigma = p["model_error"]
+    tau, sigma = p["model_error"], p["channel_error"]
     sweeps = post.sweeps(flat)
     rng = np.random.default_rng([seed, 20, index])
     ll_parts, pred_parts, gains, labels = [], [], [], []
-    o_run, o_chan, o_pt = [], [], []
+    o_run, o_chan, o_pt, l_run, l_pt = [], [], [], [], []
     predictive = []
     any_impact = np.zeros(m, dtype=bool)
     for r, (curve, y, sw) in enumerate(zip(fwd.curves, post.log_observed, sweeps, strict=True)):
-        mean, sd = gain_conditional(y, sw.log_mu, sigma, post.gain_prior)
-        g = mean + sd * rng.standard_normal(mean.shape)                      # (M, C)
+        mean, cov = gain_conditional(y, sw.log_mu, tau, sigma, post.gain_prior)
+        chol = np.linalg.cholesky(cov)
+        g = mean + np.einsum("mcd,md->mc", chol, rng.standard_normal(mean.shape))  # (M, C)
         gains.append(g)
         labels += [f"{curve.run_id}/{c}" for c in curve.channels]
-        pw = pointwise_log_likelihood(y, sw.log_mu, sigma, g)                # (M, C, N)
+        pw = pointwise_log_likelihood(y, sw.log_mu, tau, sigma, g)          # (M, N)
+        seen = np.flatnonzero(np.isfinite(y).any(axis=0))
+        ll_parts.append(pw[:, seen])
+        l_run.append(np.full(seen.size, r))
+        l_pt.append(seen)
         cc, ii = np.nonzero(np.isfinite(y))
-        ll_parts.append(pw[:, cc, ii])
-        noise = sigma[:, None, None] * rng.standard_normal((m, *y.shape))
+        noise = (tau[:, None, None] * rng.standard_normal((m, 1, y.shape[1]))
+                 + sigma[:, None, None] * rng.standard_normal((m, *y.shape)))
         with np.errstate(over="ignore", invalid="ignore"):
             arms = np.exp(g[:, :, None] + sw.log_mu[:, None, :] + noise)    # (M, C, N)
         pred_parts.append(arms[:, cc, ii])
@@ -213,7 +218,8 @@ def _fit_model(post: RunUpPosterior, config: CalibrationConfig, *, seed: int, in
         model=post.kind, posterior=post, run=run, samples=samples, log_prob=lp,
         log_likelihood=log_lik, log_gain=log_gain, arms_predictive=arms_pred,
         obs_run=np.concatenate(o_run), obs_channel=np.concatenate(o_chan),
-        obs_point=np.concatenate(o_pt), gain_labels=tuple(labels),
+        obs_point=np.concatenate(o_pt), loo_run=np.concatenate(l_run),
+        loo_point=np.concatenate(l_pt), gain_labels=tuple(labels),
         predictive=tuple(predictive), summary=summary, warnings=tuple(fit_warn),
         seconds=seconds)
 
@@ -223,7 +229,7 @@ def _loo_data(fit: RunUpFit, *, blocked: bool) -> az.InferenceData:
     if blocked:
         curves = fit.posterior.forward.curves
         keys = []
-        for r, i in zip(fit.obs_run, fit.obs_point, strict=True):
+        for r, i in zip(fit.loo_run, fit.loo_point, strict=True):
             d = np.asarray(curves[r].direction)
             same = np.flatnonzero(d == d[i])
             keys.append((int(r), str(d[i]), int(np.searchsorted(same, i)) // BLOCK_POINTS))

@@ -8,7 +8,7 @@ the defaults)::
     models = ["fvms", "vvms", "lste"]     # default []: no run-up calibration
 
     [calibration.runup]
-    max_speed_points = 100        # per direction (up, down), after binning a ramp
+    max_speed_points = 100        # windows per direction (up, down), after thinning a ramp
     min_speed_points = 20         # usable points per run below which the run is refused
     min_span = 1.3                # max/min mesh frequency a run-up must span
     steps_per_period = 64         # RK4 steps per mesh period of the model sweeps
@@ -22,6 +22,7 @@ the defaults)::
     backlash = {dist = "uniform", lower = 0.0, upper = 300.0}   # um, total 2b
     gain = {dist = "lognormal", median = 0.01, sigma = 3.0}     # must be lognormal
     model_error = {dist = "halfnormal", sd = 0.3}
+    channel_error = {dist = "halfnormal", sd = 0.3}
 
     [calibration.runup.fixed]
     fluctuation_scale = 1.0       # the default; give it a prior (and no fixed value) to sample it
@@ -51,8 +52,13 @@ tolerances, ``check_every``, ``seed`` and the equivalent-mass keys apply to it t
     untruncated lognormal and cannot be fixed. Default lognormal(median 0.01, sigma 3): wide
     (95 % over five decades), so the data set the gains.
 ``model_error`` (1)
-    Standard deviation of ``log Arms`` about the model: the relative model and measurement
-    error of the curves. Default halfnormal(sd 0.3).
+    ``tau``: standard deviation of ``log Arms`` about the model **shared by every channel at a
+    point** (each channel sees the one DTE through its own gain, so where the model is off it
+    is off on all of them): the relative model error. Default halfnormal(sd 0.3).
+``channel_error`` (1)
+    ``sigma``: standard deviation of each channel's own ``log Arms`` error (sensor noise, the
+    order-spectrum floor, a transfer path that is not quite flat). Default halfnormal(sd 0.3).
+    With one channel only ``tau^2 + sigma^2`` is identified (the summary says so).
 
 Errors name the key and its line (:class:`rigtools.errors.CampaignError`), as for the rest of
 the block (:mod:`rigtools.calibration.config`): besides those of every prior table, an unknown
@@ -112,7 +118,11 @@ RUNUP_PARAMETERS: Final[dict[str, ParameterInfo]] = {
         "total backlash 2b on the line of action"),
     "model_error": ParameterInfo(
         "1", (0.0, math.inf), prior_from_mapping({"dist": "halfnormal", "sd": 0.3}),
-        "sigma of log Arms: relative model error of the Arms curves"),
+        "tau: sd of log Arms about the model shared by every channel at a point (relative "
+        "model error)"),
+    "channel_error": ParameterInfo(
+        "1", (0.0, math.inf), prior_from_mapping({"dist": "halfnormal", "sd": 0.3}),
+        "sigma: sd of each channel's own log Arms error (noise, floor, transfer path)"),
     "gain": ParameterInfo(
         "1", (0.0, math.inf), prior_from_mapping({"dist": "lognormal", "median": 0.01,
                                                   "sigma": 3.0}),
@@ -138,7 +148,8 @@ class RunUpSettings:
     Attributes
     ----------
     max_speed_points : int
-        Points per direction (up, down) after binning a ramp (median per equal-log-f bin).
+        Windows per direction (up, down) after thinning a ramp (the window nearest the median of
+        each equal-log-f bin).
     min_speed_points : int
         Usable points per run below which the run is refused.
     min_span : float

@@ -19,10 +19,26 @@ Rules
 * **Time order** by ``step_start_s``; ``time_s`` is the middle of the window or step.
 * **Direction** from the rows' ``direction`` column (:mod:`rigtools.campaign.observe_orders`),
   computed here the same way for a table written before it existed.
-* **Binning**: each stretch of one direction in time order is reduced, when its direction has
-  more than ``max_speed_points`` points, to medians over equal bins of
-  :math:`\ln f_m` (of time for ``"hold"`` stretches), in proportion to the stretch's share of
-  the direction's points; the bins keep their time order.
+* **Thinning**: each stretch of one direction in time order is reduced, when its direction
+  has more than ``max_speed_points`` points, to one window per equal bin of :math:`\ln f_m`
+  (of time for ``"hold"`` stretches), in proportion to the stretch's share of the direction's
+  points: the window nearest the bin's median. Real windows, not medians over a bin: a median
+  of the Arms over a bin as wide as a resonance is no value the model gives at any one mesh
+  frequency (it flattened the superharmonic peaks and biased the damping by 2 % on the
+  demo's run-up).
+* **Windows**: a ramp window of duration :math:`D` is one Hann-windowed order spectrum, whose
+  band power is the :math:`w^2`-weighted mean of the power along the window (the readout band
+  holds the slow amplitude modulation). The model's value for the window is therefore
+  :math:`\sum_j W_j\,\mu(f_m(t_{mid} + \nu_j D))^2` under the root, with the nodes
+  :math:`\nu = (-\tfrac14, 0, \tfrac14)` (:data:`WINDOW_NODES`) and the weights
+  :math:`W = (w, 1 - 2w, w)`, :math:`w = 2/3 - 5/\pi^2` (:data:`WINDOW_WEIGHTS`), which
+  integrate every cubic exactly against :math:`\sin^4(\pi u)` (its variance about the
+  middle is :math:`1/12 - 5/(8\pi^2)`). :math:`f_m(t)` is the piecewise-linear interpolant of
+  the ramp windows' (middle time, :math:`f_m`); a speed step keeps its own :math:`f_m` at
+  every node. This is what makes a window that straddles a jump, or a resonance peak
+  narrower than a few windows, comparable with the periodic steady sweep (on the demo's
+  run-up the window over the down jump was 3.6 times the model at its middle, 1.12 times
+  its window mean).
 * **Gaps**: where consecutive points are more than :data:`BRIDGE_FACTOR` times the median
   spacing in :math:`\ln f_m` (of the up and down points) apart, model-only points (observed
   NaN) are inserted at equal steps of :math:`\ln f_m` no longer than that median, so the
@@ -61,6 +77,8 @@ __all__ = [
     "BRIDGE_FACTOR",
     "MAX_GAP_FRACTION",
     "SPEED_FAILURE_FLAGS",
+    "WINDOW_NODES",
+    "WINDOW_WEIGHTS",
     "RunUpCurve",
     "RunUpData",
     "RunUpDataError",
@@ -75,6 +93,11 @@ __all__ = [
 BRIDGE_FACTOR: Final = 1.5
 #: A gap wider than this fraction of the run's span in ln f_m refuses the run.
 MAX_GAP_FRACTION: Final = 0.25
+#: Quadrature nodes of a ramp window, fractions of its duration from its middle (module notes).
+WINDOW_NODES: Final = (-0.25, 0.0, 0.25)
+#: Weights of :data:`WINDOW_NODES` for the Hann window's power weight ``sin^4`` (module notes).
+WINDOW_WEIGHTS: Final = (2.0 / 3.0 - 5.0 / math.pi ** 2, 2.0 * (5.0 / math.pi ** 2) - 1.0 / 3.0,
+                         2.0 / 3.0 - 5.0 / math.pi ** 2)
 #: Flags of failed arms rows that mean the run has no usable speed signal.
 SPEED_FAILURE_FLAGS: Final = ("speed_missing", "no_speed_step", "arms_failed")
 #: The interior maximum of Arms / f_m^2 must stand this much (factor) above both ends.
@@ -139,7 +162,11 @@ class RunUpCurve:
         Peak amplitudes of mesh harmonics 1..3 per channel and point (m/s^2), ``(C, N, 3)``;
         NaN where missing.
     notes : tuple of str
-        What was left out, bridged or binned.
+        What was left out, bridged or thinned.
+    window_mesh_frequency_Hz : numpy.ndarray, optional
+        ``(N, 3)`` mesh frequency at each point's :data:`WINDOW_NODES` (Hz); the model's value
+        at the point is the :data:`WINDOW_WEIGHTS` mean of its power there (module notes).
+        None: every node at the point's ``mesh_frequency_Hz`` (speed steps).
     """
 
     run_id: str
@@ -152,11 +179,20 @@ class RunUpCurve:
     observed: np.ndarray
     harmonics: np.ndarray
     notes: tuple[str, ...] = ()
+    window_mesh_frequency_Hz: np.ndarray | None = None
 
     @property
     def n_points(self) -> int:
         """Points of the path (bridging points included)."""
         return int(self.mesh_frequency_Hz.shape[0])
+
+    @property
+    def nodes_Hz(self) -> np.ndarray:  # noqa: N802
+        """``(N, 3)`` mesh frequency at each point's window nodes (Hz)."""
+        if self.window_mesh_frequency_Hz is None:
+            f = np.asarray(self.mesh_frequency_Hz, dtype=float)
+            return np.repeat(f[:, None], len(WINDOW_NODES), axis=1)
+        return np.asarray(self.window_mesh_frequency_Hz, dtype=float)
 
     @property
     def observed_mask(self) -> np.ndarray:
@@ -283,6 +319,31 @@ class _Points:
     direction: np.ndarray  # (N,) object
     obs: np.ndarray       # (C, N)
     harm: np.ndarray      # (C, N, 3)
+    nodes: np.ndarray     # (N, 3) mesh frequency at the window's quadrature nodes
+
+    def select(self, idx: np.ndarray | slice) -> _Points:
+        """The points ``idx`` (indices or a slice, in the order given)."""
+        return _Points(self.t_start[idx], self.t_mid[idx], self.f[idx], self.direction[idx],
+                       self.obs[:, idx], self.harm[:, idx], self.nodes[idx])
+
+
+def _window_nodes(t_start: np.ndarray, t_stop: np.ndarray, t_mid: np.ndarray, f: np.ndarray,
+                  ramp: np.ndarray) -> np.ndarray:
+    """Mesh frequency at :data:`WINDOW_NODES` of each ramp window, ``(N, 3)`` (module notes).
+
+    ``f_m(t)`` is the piecewise-linear interpolant of the ramp windows' (middle, f_m) in time
+    order; a step or a window without a stop time keeps its own ``f_m`` at every node.
+    """
+    nodes = np.repeat(f[:, None], len(WINDOW_NODES), axis=1)
+    use = ramp & np.isfinite(t_stop) & (t_stop > t_start)
+    if np.count_nonzero(ramp) < 2 or not use.any():
+        return nodes
+    order = np.argsort(t_mid[ramp], kind="stable")
+    tr, fr = t_mid[ramp][order], f[ramp][order]
+    width = (t_stop - t_start)[use]
+    at = t_mid[use][:, None] + np.asarray(WINDOW_NODES)[None, :] * width[:, None]
+    nodes[use] = np.interp(at, tr, fr)
+    return nodes
 
 
 def _points(rows: pd.DataFrame, channels: list[str], rel_tolerance: float) -> _Points:
@@ -302,7 +363,10 @@ def _points(rows: pd.DataFrame, channels: list[str], rel_tolerance: float) -> _P
     hh[ci, inverse] = harm
     f_pt = np.full(n, np.nan)
     t_mid = np.full(n, np.nan)
+    t_stop = np.full(n, np.nan)
     given = np.full(n, None, dtype=object)
+    seg = (rows["segment"] if "segment" in rows else pd.Series([None] * len(rows))).to_numpy()
+    ramp = np.zeros(n, dtype=bool)
     dirs = rows["direction"].to_numpy(object) if "direction" in rows else np.full(len(rows),
                                                                                 None, object)
     for k in range(n):
@@ -310,36 +374,22 @@ def _points(rows: pd.DataFrame, channels: list[str], rel_tolerance: float) -> _P
         f_pt[k] = float(np.median(f[sel]))
         stop = t1[sel]
         stop = stop[np.isfinite(stop)]
-        t_mid[k] = 0.5 * (keys[k] + float(np.median(stop))) if stop.size else keys[k]
+        if stop.size:
+            t_stop[k] = float(np.median(stop))
+        t_mid[k] = 0.5 * (keys[k] + t_stop[k]) if stop.size else keys[k]
+        ramp[k] = bool(np.any(seg[sel] == "ramp"))
         d = [str(v) for v in dirs[sel] if isinstance(v, str) and v in DIRECTIONS]
         if d:
             given[k] = max(set(d), key=d.count)
     missing = np.array([v is None for v in given])
     if missing.any():
-        seg = rows["segment"] if "segment" in rows else pd.Series([None] * len(rows))
-        computed = (ramp_directions(t_mid, f_pt, rel_tolerance) if (seg == "ramp").any() or
-                    not (seg == "step").any() else
+        computed = (ramp_directions(t_mid, f_pt, rel_tolerance) if ramp.any() or
+                    not np.any(seg == "step") else
                     step_directions(60.0 * f_pt, rel_tolerance))
         given[missing] = computed[missing]
         given[np.array([v is None for v in given])] = "hold"
-    return _Points(keys, t_mid, f_pt, given, obs, hh)
-
-
-def _take(p: _Points, idx: Sequence[np.ndarray], direction: str) -> _Points:
-    """Medians of the points in each index group (bins), ordered by time."""
-    m = len(idx)
-    t_start, t_mid, f = np.empty(m), np.empty(m), np.empty(m)
-    obs = np.empty((p.obs.shape[0], m))
-    harm = np.empty((p.obs.shape[0], m, 3))
-    for j, sel in enumerate(idx):
-        t_start[j] = float(np.median(p.t_start[sel]))
-        t_mid[j] = float(np.median(p.t_mid[sel]))
-        f[j] = float(np.exp(np.median(np.log(p.f[sel]))))
-        obs[:, j] = _nanmedian(p.obs[:, sel], axis=1)
-        harm[:, j] = _nanmedian(p.harm[:, sel], axis=1)
-    order = np.argsort(t_start, kind="stable")
-    return _Points(t_start[order], t_mid[order], f[order],
-                   np.full(m, direction, dtype=object), obs[:, order], harm[:, order])
+    return _Points(keys, t_mid, f_pt, given, obs, hh,
+                   _window_nodes(keys, t_stop, t_mid, f_pt, ramp))
 
 
 def _stretches(direction: np.ndarray) -> list[tuple[int, int]]:
@@ -353,49 +403,50 @@ def _stretches(direction: np.ndarray) -> list[tuple[int, int]]:
     return out
 
 
+def _representative(x: np.ndarray, group: np.ndarray) -> int:
+    """The member of ``group`` whose ``x`` is nearest the group's median (the earlier on a tie)."""
+    return int(group[np.argmin(np.abs(x[group] - np.median(x[group])))])
+
+
 def _bin(p: _Points, max_points: int) -> tuple[_Points, list[str]]:
-    """Each direction reduced to at most about ``max_points`` medians (module notes)."""
+    """Each direction thinned to about ``max_points`` windows (module notes)."""
     stretches = _stretches(p.direction)
     totals: dict[str, int] = {}
     for a, b in stretches:
         totals[str(p.direction[a])] = totals.get(str(p.direction[a]), 0) + (b - a)
-    pieces: list[_Points] = []
-    notes: list[str] = []
+    keep: list[np.ndarray] = []
+    kept: dict[str, int] = {}
     for a, b in stretches:
         d = str(p.direction[a])
         n = b - a
-        sub = _Points(p.t_start[a:b], p.t_mid[a:b], p.f[a:b], p.direction[a:b],
-                      p.obs[:, a:b], p.harm[:, a:b, :])
-        if totals[d] <= max_points:
-            pieces.append(sub)
-            continue
-        n_bins = max(1, int(max_points * n / totals[d]))
+        n_bins = n if totals[d] <= max_points else max(1, int(max_points * n / totals[d]))
         if n_bins >= n:
-            pieces.append(sub)
-            continue
-        if d == "hold":
-            groups = [g for g in np.array_split(np.arange(n), n_bins) if g.size]
+            chosen = np.arange(a, b)
         else:
-            lf = np.log(sub.f)
-            edges = np.linspace(lf.min(), lf.max(), n_bins + 1)
-            which = np.clip(np.searchsorted(edges, lf, side="right") - 1, 0, n_bins - 1)
-            groups = [np.flatnonzero(which == j) for j in range(n_bins)]
-            groups = [g for g in groups if g.size]
-        pieces.append(_take(sub, groups, d))
-    binned = [(str(p.direction[a]), b - a) for a, b in stretches]
-    for d, total in totals.items():
-        if total > max_points:
-            kept = sum(pc.f.size for pc, (dd, _) in zip(pieces, binned, strict=True) if dd == d)
-            notes.append(f"{total} {d} points binned to {kept} (median per bin of "
-                         f"{'time' if d == 'hold' else 'ln f_m'}; max_speed_points = "
-                         f"{max_points})")
-    return _concat(pieces), notes
+            x = p.t_mid[a:b] if d == "hold" else np.log(p.f[a:b])
+            if d == "hold":
+                groups = [g for g in np.array_split(np.arange(n), n_bins) if g.size]
+            else:
+                edges = np.linspace(x.min(), x.max(), n_bins + 1)
+                which = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, n_bins - 1)
+                groups = [g for g in (np.flatnonzero(which == j) for j in range(n_bins))
+                          if g.size]
+            chosen = a + np.sort([_representative(x, g) for g in groups])
+        keep.append(chosen)
+        kept[d] = kept.get(d, 0) + chosen.size
+    notes = [f"{total} {d} points thinned to {kept[d]} (in each of equal bins of "
+             f"{'time' if d == 'hold' else 'ln f_m'}, the window nearest the bin's median; "
+             f"max_speed_points = {max_points})"
+             for d, total in totals.items() if total > max_points]
+    return p.select(np.concatenate(keep)), notes
 
 
 def _concat(pieces: Sequence[_Points]) -> _Points:
-    return _Points(*(np.concatenate([getattr(pc, k) for pc in pieces], axis=-1 if k != "harm"
-                                    else 1)
-                     for k in ("t_start", "t_mid", "f", "direction", "obs", "harm")))
+    def cat(name: str, axis: int) -> np.ndarray:
+        return np.concatenate([getattr(pc, name) for pc in pieces], axis=axis)
+
+    return _Points(cat("t_start", 0), cat("t_mid", 0), cat("f", 0), cat("direction", 0),
+                   cat("obs", 1), cat("harm", 1), cat("nodes", 0))
 
 
 def _bridge(p: _Points, run_id: str) -> tuple[_Points, list[str]]:
@@ -430,22 +481,20 @@ def _bridge(p: _Points, run_id: str) -> tuple[_Points, list[str]]:
     described = []
     n_new = 0
     for g in gaps:
-        pieces.append(_Points(p.t_start[start:g + 1], p.t_mid[start:g + 1], p.f[start:g + 1],
-                              p.direction[start:g + 1], p.obs[:, start:g + 1],
-                              p.harm[:, start:g + 1]))
+        pieces.append(p.select(slice(start, g + 1)))
         k = math.ceil(step[g] / med) - 1
         u = np.arange(1, k + 1) / (k + 1)
         d = "up" if lf[g + 1] > lf[g] else "down"
+        f_new = np.exp(lf[g] + u * (lf[g + 1] - lf[g]))
         pieces.append(_Points(p.t_start[g] + u * (p.t_start[g + 1] - p.t_start[g]),
-                              p.t_mid[g] + u * (p.t_mid[g + 1] - p.t_mid[g]),
-                              np.exp(lf[g] + u * (lf[g + 1] - lf[g])),
+                              p.t_mid[g] + u * (p.t_mid[g + 1] - p.t_mid[g]), f_new,
                               np.full(k, d, dtype=object), np.full((c, k), np.nan),
-                              np.full((c, k, 3), np.nan)))
+                              np.full((c, k, 3), np.nan),
+                              np.repeat(f_new[:, None], len(WINDOW_NODES), axis=1)))
         described.append(f"{p.f[g]:.0f}-{p.f[g + 1]:.0f} Hz")
         n_new += k
         start = int(g) + 1
-    pieces.append(_Points(p.t_start[start:], p.t_mid[start:], p.f[start:],
-                          p.direction[start:], p.obs[:, start:], p.harm[:, start:]))
+    pieces.append(p.select(slice(start, None)))
     note = (f"{gaps.size} gap(s) in the mesh frequency bridged by {n_new} model-only "
             f"point(s) (no observation): {', '.join(described)}")
     return _concat(pieces), [note]
@@ -550,7 +599,7 @@ def prepare_runup(observations: pd.DataFrame, run_id: str, gear_set: str,
         run_id=str(run_id), gear_set=gear_set, torque_Nm=float(np.median(torque)),
         channels=tuple(channels), mesh_frequency_Hz=pts.f, time_s=pts.t_mid,
         direction=pts.direction.astype(object), observed=pts.obs, harmonics=pts.harm,
-        notes=tuple([*notes, *bin_notes, *gap_notes]))
+        notes=tuple([*notes, *bin_notes, *gap_notes]), window_mesh_frequency_Hz=pts.nodes)
 
 
 def prepare_runups(observations: pd.DataFrame, gear_sets: Campaign | Mapping[str, str],

@@ -2,7 +2,8 @@ r"""The log posterior of one SDOF model against every run-up curve, vectorised o
 
 Free parameters (``[calibration.runup.priors]``, in this order, those not fixed by
 ``[calibration.runup.fixed]``): ``zeta`` (1), ``mesh_stiffness_scale`` (1),
-``fluctuation_scale`` (1), ``backlash`` (um, total ``2b``), ``model_error`` (1). The channel
+``fluctuation_scale`` (1), ``backlash`` (um, total ``2b``), ``model_error`` (1: the error
+shared by the channels at a point) and ``channel_error`` (1: each channel's own). The channel
 gains are marginalised (:mod:`rigtools.calibration.runup_likelihood`), one per channel and
 run, all with the ``gain`` prior.
 
@@ -30,7 +31,8 @@ __all__ = ["MICROMETRE", "RunUpPosterior", "build_posterior"]
 
 #: Metres per micrometre (backlash in the configuration and summaries is in um).
 MICROMETRE = 1e-6
-_SWEPT = ("zeta", "mesh_stiffness_scale", "fluctuation_scale", "backlash", "model_error")
+_SWEPT = ("zeta", "mesh_stiffness_scale", "fluctuation_scale", "backlash", "model_error",
+          "channel_error")
 
 
 @dataclass(frozen=True, eq=False)
@@ -100,10 +102,11 @@ class RunUpPosterior:
         """Marginal log-likelihood (gains integrated out), ``(W,)``."""
         t = np.atleast_2d(np.asarray(theta, dtype=float))
         sw = self.sweeps(t) if sweeps is None else sweeps
-        sigma = self.unpack(t)["model_error"]
+        p = self.unpack(t)
         ll = np.zeros(t.shape[0])
         for y, s in zip(self.log_observed, sw, strict=True):
-            ll = ll + marginal_log_likelihood(y, s.log_mu, sigma, self.gain_prior)
+            ll = ll + marginal_log_likelihood(y, s.log_mu, p["model_error"],
+                                              p["channel_error"], self.gain_prior)
         return np.where(np.isnan(ll), -np.inf, ll)
 
     def __call__(self, theta: np.ndarray) -> np.ndarray:

@@ -15,12 +15,14 @@ Files (:func:`write_runup_outputs`, under ``<calibration dir>/runup/``, the pipe
     arviz InferenceData (h5netcdf). ``posterior``: the free parameters (chains are the emcee
     walkers, draws thinned to at most :data:`MAX_STORED_DRAWS` in all),
     ``mesh_natural_frequency_Hz``, ``model_natural_frequency_Hz`` over ``run``, ``log_gain``
-    over ``run_channel`` (drawn from its exact conditional). ``log_likelihood``: ``arms``
-    over ``obs``, one per observed (run, channel, point). ``posterior_predictive``:
-    ``arms`` over ``obs`` (model, gain and log-normal error). ``observed_data``: ``arms``.
-    ``constant_data``: per ``obs`` its ``run``, ``channel``, ``point``, mesh frequency,
-    direction and torque. ``sample_stats``: ``lp``. Attributes: the configuration (JSON), the
-    model, convergence, sampler settings, rigtools version.
+    over ``run_channel`` (drawn from its exact conditional). ``log_likelihood``:
+    ``arms_point`` over ``point``, one per observed (run, point), its channels together (they
+    share the model error; :mod:`rigtools.calibration.runup_likelihood`).
+    ``posterior_predictive``: ``arms`` over ``obs`` (model, gain, the shared and the channel's
+    log-normal errors). ``observed_data``: ``arms``. ``constant_data``: per ``obs`` its
+    ``run``, ``channel``, ``point``, mesh frequency, direction and torque; per ``point`` its
+    ``point_run`` and ``point_index``. ``sample_stats``: ``lp``. Attributes: the
+    configuration (JSON), the model, convergence, sampler settings, rigtools version.
 ``<model>/summary.json``
     Parameters (mean, sd, q05, q50, q95, ess_bulk, r_hat, identified, prior; the interval
     left null with a statement when the data do not identify the parameter), derived
@@ -154,13 +156,15 @@ class RunUpFit:
     log_prob : numpy.ndarray
         ``(W, n)``.
     log_likelihood : numpy.ndarray
-        ``(W, n, O)`` pointwise, one per observed (run, channel, point).
+        ``(W, n, U)`` pointwise, one per observed (run, point), all its channels together.
     log_gain : numpy.ndarray
         ``(W, n, G)`` drawn from the exact conditional, ``G`` = (run, channel) pairs.
     arms_predictive : numpy.ndarray
         ``(W, n, O)`` posterior predictive Arms at the observed points (m/s^2).
     obs_run, obs_channel, obs_point : numpy.ndarray
         ``(O,)`` index of the run (into ``posterior.forward.curves``), channel and point.
+    loo_run, loo_point : numpy.ndarray
+        ``(U,)`` index of the run and point of each ``log_likelihood`` term.
     gain_labels : tuple of str
         ``"<run>/<channel>"`` for the ``G`` gains.
     predictive : tuple of RunPredictive
@@ -183,6 +187,8 @@ class RunUpFit:
     obs_run: np.ndarray
     obs_channel: np.ndarray
     obs_point: np.ndarray
+    loo_run: np.ndarray
+    loo_point: np.ndarray
     gain_labels: tuple[str, ...]
     predictive: tuple[RunPredictive, ...]
     summary: dict[str, Any]
@@ -319,18 +325,22 @@ def _from_dict(fit: RunUpFit, posterior: dict[str, np.ndarray], observed: np.nda
     return az.from_dict(
         posterior=posterior,
         posterior_predictive={"arms": fit.arms_predictive},
-        log_likelihood={"arms": fit.log_likelihood},
+        log_likelihood={"arms_point": fit.log_likelihood},
         observed_data={"arms": observed},
         constant_data={"obs_run": np.array([runs[r] for r in fit.obs_run]),
                        "obs_channel": chan, "obs_point": fit.obs_point.astype(np.int64),
-                       "mesh_frequency_Hz": obs_f, "direction": obs_dir, "torque_Nm": torque},
+                       "mesh_frequency_Hz": obs_f, "direction": obs_dir, "torque_Nm": torque,
+                       "point_run": np.array([runs[r] for r in fit.loo_run]),
+                       "point_index": fit.loo_point.astype(np.int64)},
         sample_stats={"lp": fit.log_prob},
-        coords={"obs": list(range(fit.obs_run.size)), "run": runs,
+        coords={"obs": list(range(fit.obs_run.size)), "point": list(range(fit.loo_run.size)),
+                "run": runs,
                 "run_channel": list(fit.gain_labels)},
         dims={"arms": ["obs"], "model_natural_frequency_Hz": ["run"],
               "log_gain": ["run_channel"], "obs_run": ["obs"], "obs_channel": ["obs"],
               "obs_point": ["obs"], "mesh_frequency_Hz": ["obs"], "direction": ["obs"],
-              "torque_Nm": ["obs"]},
+              "torque_Nm": ["obs"], "arms_point": ["point"], "point_run": ["point"],
+              "point_index": ["point"]},
         attrs=attrs,
     )
 

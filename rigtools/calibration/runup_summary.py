@@ -75,8 +75,10 @@ def _conventions(forward: RunUpForward) -> dict[str, Any]:
         "zeta": "damping ratio relative to k_ref: c = 2 zeta sqrt(k_ref m_e)",
         "backlash": "total backlash 2b on the line of action (um)",
         "observation_model": "Arms_c = G_c (2 pi f_m)^2 sqrt(sum_h h^4 D_h^2), D_h the peak "
-                             "DTE amplitude of mesh harmonic h (m), log-normal error sigma = "
-                             "model_error, log G_c marginalised (prior: gain)",
+                             "DTE amplitude of mesh harmonic h (m), power-averaged over the "
+                             "window's nodes (Hann^2 weights); log Arms error = a term shared "
+                             "by the channels at a point (sd model_error) + each channel's "
+                             "own (sd channel_error); log G_c marginalised (prior: gain)",
         "stiffness_scale": "exact: the model with compliance C/s is the mesh cycle at T/s "
                            "with k_ref = s kbar_F0",
     }

@@ -100,11 +100,11 @@ RUNUP_GEAR_SET: Final[str] = "kahraman-blankenship"
 #: ``[calibration.runup]`` settings of the generated campaign, by demo size (contract keys).
 RUNUP_CALIBRATION: Final[dict[str, dict[str, int]]] = {
     "ci": {"walkers": 16, "max_steps": 600, "max_speed_points": 40},
-    # 40 points per direction and at most 2000 steps: the three models calibrate in minutes,
-    # not the better part of an hour (a sweep's cost is proportional to its points; VVMS's
-    # tau climbs to ~80 steps on this run-up, so a converged chain needs ~4000 steps and the
-    # report then says the chain is not converged)
-    "full": {"max_speed_points": 40, "max_steps": 2000},
+    # 16 walkers, 30 windows per direction and at most 800 steps: the three models calibrate
+    # in minutes, not hours. A log-probability sweeps the whole ramp through continuation
+    # nodes 0.3 % apart (about 1300 nodes for 600 -> 5000 rpm); VVMS's tau is of the order of
+    # 100 steps here, so the report says the chains are not converged.
+    "full": {"walkers": 16, "max_speed_points": 30, "max_steps": 800},
 }
 #: The SDOF models the demo campaign calibrates against the run-up.
 _MODELS: Final[tuple[str, ...]] = ("fvms", "vvms", "lste")

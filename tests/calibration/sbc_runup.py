@@ -1,15 +1,16 @@
 """Simulation-based calibration of the SDOF run-up calibration (Talts et al. 2018).
 
-Each simulation draws ``zeta``, the stiffness scale ``s``, the model error and one gain per
-channel from the default ``[calibration.runup]`` priors (the backlash fixed at 136 um, so
-that no draw depends on a parameter a run-up without back-side impact cannot identify; the
-fluctuation scale at its default 1), sweeps a VVMS run-up of the Kahraman-Blankenship pair
+Each simulation draws ``zeta``, the stiffness scale ``s``, the model error (shared by the
+channels at a point), the channel error and one gain per channel from the default
+``[calibration.runup]`` priors (the backlash fixed at 136 um, so that no draw depends on a
+parameter a run-up without back-side impact cannot identify; the fluctuation scale at its
+default 1), sweeps a VVMS run-up of the Kahraman-Blankenship pair
 at 300 N m over ``0.6-1.45`` times the true natural frequency, up then down, with the plain
 per-walker sweep (:func:`models.dynamics.walkers.sweep_walkers_reference`: not the compiled
-kernel the calibration uses), multiplies by the gains and log-normal noise, fits it with
-:func:`rigtools.calibration.runup_api.calibrate_runup_data` and records, for ``zeta``, the
-mesh natural frequency ``f_n`` and the model error: whether the central 90 % interval covers
-the truth and the rank of the truth among ``L = 99`` evenly spaced posterior draws.
+kernel the calibration uses), multiplies by the gains and the two log-normal errors, fits it
+with :func:`rigtools.calibration.runup_api.calibrate_runup_data` and records, for ``zeta``,
+the mesh natural frequency ``f_n`` and the two errors: whether the central 90 % interval
+covers the truth and the rank of the truth among ``L = 99`` evenly spaced posterior draws.
 
 Checks (:func:`check`): 90 % coverage in [0.85, 0.95]; the rank histogram (10 bins) passes a
 chi-square test of uniformity at 1 %.
@@ -46,44 +47,56 @@ from rigtools.calibration import CalibrationError, default_config
 from rigtools.calibration.runup_api import calibrate_runup_data
 from rigtools.calibration.runup_config import RunUpSettings
 from rigtools.calibration.runup_data import RunUpCurve, RunUpData
-from rigtools.calibration.runup_forward import acceleration_arms
+from rigtools.calibration.runup_forward import acceleration_arms, window_path
 
 GEAR_SET = "kahraman-blankenship"
 TORQUE_NM = 300.0
 BACKLASH_UM = 136.0
 CHANNELS = ("accel_x", "accel_y", "accel_z")
-QUANTITIES = ("zeta", "mesh_natural_frequency_Hz", "model_error")
+QUANTITIES = ("zeta", "mesh_natural_frequency_Hz", "model_error", "channel_error")
 
 
 def simulate_curve(kind: str, torque_Nm: float, *, zeta: float, stiffness_scale: float,
                    gains: Sequence[float], model_error: float, seed: int,
+                   channel_error: float = 0.0,
                    points_per_direction: int = 40, span: tuple[float, float] = (0.6, 1.45),
                    backlash_um: float = BACKLASH_UM, fluctuation_scale: float = 1.0,
                    run_id: str = "sim", channels: Sequence[str] = CHANNELS) -> RunUpCurve:
-    """A synthetic run-up: the plain sweep of ``kind``, times the gains, log-normal noise.
+    """A synthetic run-up: the plain sweep of ``kind``, times the gains, log-normal errors.
+
+    ``log A_ci = log G_c + log mu_i + model_error delta_i + channel_error e_ci`` with
+    ``delta``, ``e`` standard Normal (``delta`` shared by the channels at a point).
 
     The path runs from ``span[0]`` to ``span[1]`` times the true natural frequency
-    ``sqrt(s kbar_F0 / m_e) / 2 pi`` (log-spaced) and back.
+    ``sqrt(s kbar_F0 / m_e) / 2 pi`` (log-spaced) and back; the plain sweep runs it as a rig
+    ramps, through continuation nodes no more than
+    :data:`~rigtools.calibration.runup_forward.MAX_PATH_STEP` apart
+    (:func:`~rigtools.calibration.runup_forward.window_path`), and ``mu`` is read at the points.
     """
     pair = load_gear_set(GEAR_SET).pair
     bank = cycle_bank(pair, torque_Nm, kind)
     fn = float(bank.natural_frequency_Hz(stiffness_scale))
     up = fn * np.exp(np.linspace(math.log(span[0]), math.log(span[1]), points_per_direction))
     f = np.concatenate([up, up[::-1]])
-    sw = sweep_walkers_reference(bank, f, zeta=[zeta], stiffness_scale=[stiffness_scale],
-                                 fluctuation_scale=[fluctuation_scale],
-                                 backlash_m=[backlash_um * 1e-6])
-    mu = acceleration_arms(sw.amplitude_m[0], f)
-    rng = np.random.default_rng([seed, 7])
-    g = np.asarray(gains, dtype=float)[:, None]
-    obs = g * mu[None, :] * np.exp(model_error * rng.standard_normal((len(channels), f.size)))
     n = points_per_direction
     direction = np.array(["up"] * n + ["down"] * n, dtype=object)
     t = np.linspace(0.0, 10.0, f.size)
-    return RunUpCurve(run_id=run_id, gear_set=GEAR_SET, torque_Nm=float(torque_Nm),
-                      channels=tuple(channels), mesh_frequency_Hz=f, time_s=t,
-                      direction=direction, observed=obs,
-                      harmonics=np.full((len(channels), f.size, 3), np.nan))
+    nan = np.full((len(channels), f.size), np.nan)
+    curve = RunUpCurve(run_id=run_id, gear_set=GEAR_SET, torque_Nm=float(torque_Nm),
+                       channels=tuple(channels), mesh_frequency_Hz=f, time_s=t,
+                       direction=direction, observed=nan,
+                       harmonics=np.full((len(channels), f.size, 3), np.nan))
+    path = window_path(curve)
+    sw = sweep_walkers_reference(bank, path.mesh_frequency_Hz, zeta=[zeta],
+                                 stiffness_scale=[stiffness_scale],
+                                 fluctuation_scale=[fluctuation_scale],
+                                 backlash_m=[backlash_um * 1e-6])
+    mu = path.power_mean(acceleration_arms(sw.amplitude_m[0], path.mesh_frequency_Hz))
+    rng = np.random.default_rng([seed, 7])
+    g = np.asarray(gains, dtype=float)[:, None]
+    shared = model_error * rng.standard_normal(f.size)
+    own = channel_error * rng.standard_normal((len(channels), f.size))
+    return replace(curve, observed=g * mu[None, :] * np.exp(shared[None, :] + own))
 
 
 @dataclass(frozen=True)
@@ -117,7 +130,7 @@ def one(args: tuple[int, Settings]) -> dict[str, Any]:
     rng = np.random.default_rng([i, 11])
     ru = cfg.runup
     draw = {n: float(ru.parameter(n).prior.sample(rng, 1)[0])
-            for n in ("zeta", "mesh_stiffness_scale", "model_error")}
+            for n in ("zeta", "mesh_stiffness_scale", "model_error", "channel_error")}
     while not 0.3 <= draw["mesh_stiffness_scale"] <= 3.0:   # the prior as the banks cut it
         draw["mesh_stiffness_scale"] = float(
             ru.parameter("mesh_stiffness_scale").prior.sample(rng, 1)[0])
@@ -125,11 +138,13 @@ def one(args: tuple[int, Settings]) -> dict[str, Any]:
     pair = load_gear_set(GEAR_SET).pair
     bank = cycle_bank(pair, TORQUE_NM, "vvms")
     truth = {"zeta": draw["zeta"], "model_error": draw["model_error"],
+             "channel_error": draw["channel_error"],
              "mesh_natural_frequency_Hz": float(bank.natural_frequency_Hz(
                  draw["mesh_stiffness_scale"]))}
     curve = simulate_curve("vvms", TORQUE_NM, zeta=draw["zeta"],
                            stiffness_scale=draw["mesh_stiffness_scale"], gains=gains,
-                           model_error=draw["model_error"], seed=i,
+                           model_error=draw["model_error"],
+                           channel_error=draw["channel_error"], seed=i,
                            points_per_direction=settings.points_per_direction)
     t0 = time.perf_counter()
     try:
@@ -141,6 +156,7 @@ def one(args: tuple[int, Settings]) -> dict[str, Any]:
     post = fit.posterior
     p = post.unpack(fit.run.samples())
     draws = {"zeta": p["zeta"], "model_error": p["model_error"],
+             "channel_error": p["channel_error"],
              "mesh_natural_frequency_Hz": post.forward.natural_frequency_Hz(
                  p["mesh_stiffness_scale"])}
     out: dict[str, Any] = {"i": i, "seconds": time.perf_counter() - t0,

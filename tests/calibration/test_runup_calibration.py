@@ -3,7 +3,7 @@
 Synthetic data: the plain per-walker sweep (``sweep_walkers_reference``, not the compiled
 kernel the calibration uses) of a known model, times a gain per channel, with log-normal
 noise (:func:`sbc_runup.simulate_curve`). The default suite runs reduced versions (one
-torque, 20 points per direction, 8 walkers, a few dozen steps: the chains are not converged,
+torque, 20 points per direction, 10 walkers, a few dozen steps: the chains are not converged,
 which the result flags); the slow tests run the full ones (three torques, all three models,
 sampled to convergence).
 """
@@ -26,7 +26,7 @@ from rigtools.calibration.runup_outputs import RUNUP_DIR, RunUpResult
 from rigtools.calibration.runup_summary import NO_BACKSIDE_STATEMENT
 from rigtools.schemas import iter_errors
 
-TRUTH = {"zeta": 0.025, "stiffness_scale": 0.9, "model_error": 0.1,
+TRUTH = {"zeta": 0.025, "stiffness_scale": 0.9, "model_error": 0.1, "channel_error": 0.03,
          "gains": (1e-2, 4e-3, 7e-3)}
 
 
@@ -48,10 +48,11 @@ def test_vvms_truth_is_preferred_to_fvms_and_the_outputs_hold_what_the_figure_ne
         tmp_path) -> None:
     curve = simulate_curve("vvms", 300.0, zeta=TRUTH["zeta"],
                            stiffness_scale=TRUTH["stiffness_scale"], gains=TRUTH["gains"],
-                           model_error=TRUTH["model_error"], seed=1, points_per_direction=20,
-                           run_id="KB-300")
+                           model_error=TRUTH["model_error"],
+                           channel_error=TRUTH["channel_error"], seed=1,
+                           points_per_direction=20, run_id="KB-300")
     refusal = "run 'KB-bad': 3 usable speed points, fewer than min_speed_points = 20"
-    res = _fit((curve,), ("vvms", "fvms"), Settings(walkers=8, max_steps=60, map_starts=1),
+    res = _fit((curve,), ("vvms", "fvms"), Settings(walkers=10, max_steps=60, map_starts=1),
                refused={"KB-bad": refusal}, outdir=tmp_path)
     # comparison: VVMS ahead, with the numbers and both checks
     v = res.comparison.variants
@@ -88,8 +89,9 @@ def test_vvms_truth_is_preferred_to_fvms_and_the_outputs_hold_what_the_figure_ne
     assert inside.mean() > 0.7
     assert set(p.jump_measured_Hz) == {"up", "down"} and set(p.jump_model_Hz) == {"up", "down"}
     assert p.jump_measured_Hz["up"] is not None and p.jump_model_Hz["up"] is not None
-    # pointwise log-likelihood: one per observed (run, channel, point)
-    assert res.fits["vvms"].log_likelihood.shape[-1] == 3 * 40
+    # pointwise log-likelihood: one per observed (run, point), its channels together
+    assert res.fits["vvms"].log_likelihood.shape[-1] == 40
+    assert res.fits["vvms"].arms_predictive.shape[-1] == 3 * 40
     # files
     root = tmp_path / RUNUP_DIR
     for m in ("vvms", "fvms"):
@@ -108,7 +110,7 @@ def test_a_ramp_below_the_resonance_is_named_and_a_rerun_resumes(tmp_path) -> No
                            stiffness_scale=TRUTH["stiffness_scale"], gains=TRUTH["gains"],
                            model_error=0.05, seed=2, points_per_direction=12,
                            span=(0.35, 0.7), run_id="KB-slow")
-    settings = Settings(walkers=8, max_steps=30, map_starts=1)
+    settings = Settings(walkers=10, max_steps=30, map_starts=1)
     res = _fit((curve,), ("vvms",), settings, fixed_backlash=True, outdir=tmp_path)
     assert any(w.startswith("run KB-slow:") and "resonance" in w for w in res.warnings), \
         res.warnings
@@ -134,7 +136,8 @@ def test_vvms_runups_at_three_torques_full() -> None:
     curves = tuple(simulate_curve("vvms", t, zeta=TRUTH["zeta"],
                                   stiffness_scale=TRUTH["stiffness_scale"],
                                   gains=TRUTH["gains"], model_error=TRUTH["model_error"],
-                                  seed=10 + i, points_per_direction=50, run_id=f"KB-{t:g}")
+                                  channel_error=TRUTH["channel_error"], seed=10 + i,
+                                  points_per_direction=50, run_id=f"KB-{t:g}")
                    for i, t in enumerate((100.0, 200.0, 300.0)))
     res = _fit(curves, ("fvms", "vvms", "lste"), Settings(), fixed_backlash=False)
     v = res.comparison.variants

@@ -44,7 +44,8 @@ def test_defaults_have_no_models_and_the_documented_priors() -> None:
     assert ru == RunUpSettings()
     assert (ru.max_speed_points, ru.min_speed_points, ru.min_span, ru.steps_per_period,
             ru.walkers, ru.max_steps) == (100, 20, 1.3, 64, None, None)
-    assert ru.free_parameters == ("zeta", "mesh_stiffness_scale", "backlash", "model_error")
+    assert ru.free_parameters == ("zeta", "mesh_stiffness_scale", "backlash", "model_error",
+                                  "channel_error")
     assert ru.parameter("fluctuation_scale").fixed == 1.0
     assert ru.parameter("zeta").prior.describe() == "lognormal(median=0.03, sigma=0.7)"
     assert ru.parameter("backlash").prior.describe() == "uniform(0, 300)"
@@ -63,7 +64,7 @@ def test_a_full_block_is_resolved_and_round_trips(
     assert (ru.max_speed_points, ru.min_speed_points, ru.min_span, ru.steps_per_period,
             ru.walkers, ru.max_steps) == (80, 25, 1.5, 48, 24, 9000)
     assert ru.free_parameters == ("zeta", "mesh_stiffness_scale", "fluctuation_scale",
-                                  "model_error")
+                                  "model_error", "channel_error")
     assert ru.parameter("backlash").fixed == 136.0
     assert ru.parameter("gain").prior.describe() == "lognormal(median=0.005, sigma=2)"
     again = parse_calibration_block(cfg.to_dict(), source="c", line_of=lambda k: None)

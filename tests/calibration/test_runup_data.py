@@ -18,6 +18,8 @@ from rigtools.calibration.errors import CalibrationError
 from rigtools.calibration.runup_config import RunUpSettings
 from rigtools.calibration.runup_data import (
     MAX_GAP_FRACTION,
+    WINDOW_NODES,
+    WINDOW_WEIGHTS,
     RunUpCurve,
     RunUpDataError,
     has_interior_maximum,
@@ -103,8 +105,9 @@ def test_directions_missing_from_the_table_are_computed():
     assert set(d) <= {"up", "down", "hold"}
 
 
-def test_binning_keeps_time_order_and_at_most_max_points_per_direction():
-    table = to_frame(ramp_rows(n=300))
+def test_thinning_keeps_time_order_and_at_most_max_points_per_direction():
+    rows = ramp_rows(n=300)
+    table = to_frame(rows)
     c = prepare_runup(table, "R", "kb", RunUpSettings(max_speed_points=50))
     d = np.array(c.direction)
     for way in ("up", "down"):
@@ -112,9 +115,58 @@ def test_binning_keeps_time_order_and_at_most_max_points_per_direction():
     assert np.all(np.diff(c.time_s) > 0)
     up = c.mesh_frequency_Hz[d == "up"]
     assert np.all(np.diff(up) > 0) and np.all(np.diff(c.mesh_frequency_Hz[d == "down"]) < 0)
-    # medians of a smooth curve sit on it
-    np.testing.assert_allclose(c.observed[0], arms_of(c.mesh_frequency_Hz), rtol=0.05)
-    assert any("binned" in n for n in c.notes)
+    # every point is one of the windows, with its own values (no medians over a bin)
+    windows = {round(r["step_start_s"] + 0.05, 6): r for r in rows if r["channel"] == "x"}
+    for f, t, a, h in zip(c.mesh_frequency_Hz, c.time_s, c.observed[0], c.harmonics[0],
+                          strict=True):
+        r = windows[round(t, 6)]
+        assert f == r["mesh_frequency_Hz"]
+        assert a == r["arms_m_s2"] and h[0] == r["a1_m_s2"]
+    np.testing.assert_allclose(c.observed[0], arms_of(c.mesh_frequency_Hz), rtol=1e-12)
+    assert any("thinned" in n for n in c.notes)
+
+
+def test_window_weights_integrate_cubics_against_the_hann_power_weight():
+    # sin^4(pi u) on [0, 1] is the power weight of a Hann window; checked by dense quadrature
+    u = np.linspace(0.0, 1.0, 400_001)
+    w = np.sin(np.pi * u) ** 4
+    nodes = 0.5 + np.asarray(WINDOW_NODES)
+    assert sum(WINDOW_WEIGHTS) == pytest.approx(1.0, abs=1e-15)
+    for k in range(4):
+        exact = np.trapezoid((u - 0.5) ** k * w, u) / np.trapezoid(w, u)
+        rule = float(np.dot(WINDOW_WEIGHTS, (nodes - 0.5) ** k))
+        assert rule == pytest.approx(exact, abs=1e-9)
+    # by hand: the variance about the middle is 1/12 - 5/(8 pi^2)
+    assert float(np.dot(WINDOW_WEIGHTS, (nodes - 0.5) ** 2)) == pytest.approx(
+        1 / 12 - 5 / (8 * np.pi ** 2), rel=1e-12)
+
+
+def test_ramp_windows_carry_the_mesh_frequency_at_their_nodes():
+    c = prepare_runup(to_frame(ramp_rows(n=60)), "R", "kb")
+    nodes = c.nodes_Hz
+    assert nodes.shape == (c.n_points, 3)
+    # windows 0.1 s long, 0.1 s apart: the nodes sit a quarter window (0.025 s) either side,
+    # a quarter of the way to the neighbouring windows on the piecewise-linear f_m(t)
+    up = np.geomspace(600.0, 1500.0, 60)
+    i = 10
+    assert nodes[i, 1] == pytest.approx(up[i])
+    assert nodes[i, 0] == pytest.approx(up[i] + 0.25 * (up[i - 1] - up[i]))
+    assert nodes[i, 2] == pytest.approx(up[i] + 0.25 * (up[i + 1] - up[i]))
+    # on the way down the first node is the higher frequency (time order)
+    down = np.flatnonzero(np.array(c.direction) == "down")
+    assert np.all(nodes[down, 0] > nodes[down, 2])
+
+
+def test_speed_steps_keep_their_own_mesh_frequency_at_every_node():
+    rows = []
+    for i, f in enumerate(np.geomspace(500.0, 1500.0, 30)):
+        row = steady_rows()[0] | {"step_index": i, "step_start_s": 6.0 * i,
+                                  "step_stop_s": 6.0 * i + 5.0, "mesh_frequency_Hz": f,
+                                  "arms_m_s2": float(arms_of(np.array([f]))[0])}
+        rows.append(row)
+    c = prepare_runup(to_frame(rows), "S", "kb")
+    assert c.n_points == 30
+    np.testing.assert_array_equal(c.nodes_Hz, np.repeat(c.mesh_frequency_Hz[:, None], 3, 1))
 
 
 def test_a_gap_is_bridged_by_model_only_points():

@@ -17,14 +17,29 @@ from rigtools.calibration.runup_likelihood import (
 )
 
 
-def _case(seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray, GainPrior]:
+def _case(seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, GainPrior]:
     rng = np.random.default_rng(seed)
-    log_mu = rng.normal(0.0, 1.0, (3, 9))                      # W = 3 parameter sets
-    y = np.log(0.01) + log_mu[0][None, :] + rng.normal(0, 0.2, (2, 9))
+    log_mu = rng.normal(0.0, 1.0, (4, 9))                      # W = 4 parameter sets
+    y = (np.log([[0.01], [0.03], [0.005]]) + log_mu[0][None, :] + rng.normal(0, 0.2, 9)
+         + rng.normal(0, 0.05, (3, 9)))
     y[1, [2, 5]] = np.nan                                       # channel 2 misses two points
+    y[2, 3] = np.nan
     y[:, 7] = np.nan                                            # a bridging point
-    sigma = np.array([0.2, 0.35, 0.1])
-    return y, log_mu, sigma, GainPrior(math.log(0.02), 1.5)
+    tau = np.array([0.2, 0.0, 0.1, 0.4])                        # W 1: independent channels
+    sigma = np.array([0.05, 0.35, 0.1, 0.02])
+    return y, log_mu, tau, sigma, GainPrior(math.log(0.02), 1.5)
+
+
+def _dense(y: np.ndarray, log_mu: np.ndarray, tau: float, sigma: float,
+           prior: GainPrior) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The observed log A as one Normal vector: its mean, covariance, and the index maps."""
+    c_idx, i_idx = np.nonzero(np.isfinite(y))
+    same_point = i_idx[:, None] == i_idx[None, :]
+    same_channel = c_idx[:, None] == c_idx[None, :]
+    cov = (sigma**2 * np.eye(c_idx.size) + tau**2 * same_point
+           + prior.sd**2 * same_channel)
+    mean = prior.mean + log_mu[i_idx]
+    return mean, cov, c_idx, i_idx
 
 
 def _quad(y: np.ndarray, log_mu: np.ndarray, sigma: float, prior: GainPrior) -> float:
@@ -35,83 +50,124 @@ def _quad(y: np.ndarray, log_mu: np.ndarray, sigma: float, prior: GainPrior) -> 
         r = y[c, ok] - log_mu[ok]
         shift = float(np.mean(r))
 
-        def f(g: float, r: np.ndarray = r, shift: float = shift) -> float:
-            return float(np.exp(stats.norm.logpdf(g, prior.mean, prior.sd)
-                                + np.sum(stats.norm.logpdf(r, g, sigma)) + 40.0))
+        def logf(g: float, r: np.ndarray = r) -> float:
+            return float(stats.norm.logpdf(g, prior.mean, prior.sd)
+                         + np.sum(stats.norm.logpdf(r, g, sigma)))
+
+        top = logf(shift)           # scale so the integrand peaks near 1
+
+        def f(g: float, top: float = top, logf=logf) -> float:
+            return math.exp(logf(g) - top)
 
         val, _ = integrate.quad(f, shift - 3.0, shift + 3.0, epsabs=0, epsrel=1e-11,
                                 limit=200)
-        total += math.log(val) - 40.0
+        total += math.log(val) + top
     return total
 
 
-def test_marginalised_gain_matches_numerical_integration() -> None:
-    y, log_mu, sigma, prior = _case()
-    ll = marginal_log_likelihood(y, log_mu, sigma, prior)
-    for w in range(3):
+def test_marginal_matches_the_dense_multivariate_normal() -> None:
+    # independent route: the full covariance sigma^2 I + tau^2 (same point) + s0^2 (same
+    # channel) of every observed value, and scipy's multivariate Normal
+    for seed in range(3):
+        y, log_mu, tau, sigma, prior = _case(seed)
+        ll = marginal_log_likelihood(y, log_mu, tau, sigma, prior)
+        for w in range(4):
+            mean, cov, c_idx, i_idx = _dense(y, log_mu[w], tau[w], sigma[w], prior)
+            ref = stats.multivariate_normal(mean, cov).logpdf(y[c_idx, i_idx])
+            assert ll[w] == pytest.approx(ref, abs=1e-8)
+
+
+def test_without_the_shared_error_it_is_the_independent_model_by_quadrature() -> None:
+    # limiting case tau = 0: each channel's gain integrates out alone (quadrature)
+    y, log_mu, _, sigma, prior = _case()
+    ll = marginal_log_likelihood(y, log_mu, np.zeros(4), sigma, prior)
+    for w in range(4):
         assert ll[w] == pytest.approx(_quad(y, log_mu[w], float(sigma[w]), prior), abs=1e-7)
+
+
+def _mvn_logpdf(x: np.ndarray, mean: np.ndarray, cov: np.ndarray) -> np.ndarray:
+    return np.array([stats.multivariate_normal(m, c).logpdf(v)
+                     for v, m, c in zip(x, mean, cov, strict=True)])
 
 
 def test_bayes_identity_ties_the_pointwise_terms_to_the_marginal() -> None:
     """Log p(y|theta) = sum_i log p(y_i|g) + log p(g) - log p(g|y, theta), for any g."""
-    y, log_mu, sigma, prior = _case(1)
-    ll = marginal_log_likelihood(y, log_mu, sigma, prior)
-    mean, sd = gain_conditional(y, log_mu, sigma, prior)
+    y, log_mu, tau, sigma, prior = _case(1)
+    ll = marginal_log_likelihood(y, log_mu, tau, sigma, prior)
+    mean, cov = gain_conditional(y, log_mu, tau, sigma, prior)
     rng = np.random.default_rng(3)
+    c = y.shape[0]
     for _ in range(3):
-        g = mean + sd * rng.normal(0.0, 2.0, mean.shape)      # any gain, not only the mode
-        pw = pointwise_log_likelihood(y, log_mu, sigma, g)
-        assert np.isnan(pw[:, 1, 2]).all() and np.isnan(pw[:, :, 7]).all()
-        rhs = (np.nansum(pw, axis=(1, 2))
-               + stats.norm.logpdf(g, prior.mean, prior.sd).sum(axis=1)
-               - stats.norm.logpdf(g, mean, sd).sum(axis=1))
-        np.testing.assert_allclose(rhs, ll, rtol=0, atol=1e-9)
+        g = mean + rng.normal(0.0, 0.3, mean.shape)             # any gain, not only the mode
+        pw = pointwise_log_likelihood(y, log_mu, tau, sigma, g)
+        assert pw.shape == (4, 9) and np.isnan(pw[:, 7]).all()
+        rhs = (np.nansum(pw, axis=1)
+               + _mvn_logpdf(g, np.full_like(g, prior.mean),
+                             np.broadcast_to(prior.sd**2 * np.eye(c), cov.shape))
+               - _mvn_logpdf(g, mean, cov))
+        np.testing.assert_allclose(rhs, ll, rtol=0, atol=1e-8)
 
 
-def test_gain_conditional_is_the_exact_posterior_of_the_gain() -> None:
-    y, log_mu, sigma, prior = _case(2)
-    mean, sd = gain_conditional(y, log_mu, sigma, prior)
-    for c in range(2):
-        ok = np.isfinite(y[c])
-        r = y[c, ok] - log_mu[1, ok]
+def test_pointwise_terms_are_each_points_multivariate_normal() -> None:
+    y, log_mu, tau, sigma, _ = _case(5)
+    g = np.log([[0.01, 0.03, 0.005]] * 4)
+    pw = pointwise_log_likelihood(y, log_mu, tau, sigma, g)
+    for w in range(4):
+        for i in range(9):
+            ok = np.isfinite(y[:, i])
+            if not ok.any():
+                continue
+            cov = sigma[w]**2 * np.eye(ok.sum()) + tau[w]**2
+            ref = stats.multivariate_normal(g[w, ok] + log_mu[w, i], cov).logpdf(y[ok, i])
+            assert pw[w, i] == pytest.approx(ref, abs=1e-10)
 
-        def dens(g: float, k: int, r: np.ndarray = r) -> float:
-            lp = stats.norm.logpdf(g, prior.mean, prior.sd) + np.sum(
-                stats.norm.logpdf(r, g, sigma[1]))
-            return float(g**k * np.exp(lp + 30.0))
 
-        lo, hi = float(np.mean(r)) - 2.0, float(np.mean(r)) + 2.0
-        z = integrate.quad(dens, lo, hi, args=(0,), epsrel=1e-12)[0]
-        m1 = integrate.quad(dens, lo, hi, args=(1,), epsrel=1e-12)[0] / z
-        m2 = integrate.quad(dens, lo, hi, args=(2,), epsrel=1e-12)[0] / z
-        assert mean[1, c] == pytest.approx(m1, abs=1e-8)
-        assert sd[1, c] == pytest.approx(math.sqrt(m2 - m1 * m1), rel=1e-6)
+def test_gain_conditional_is_the_exact_posterior_of_the_gains() -> None:
+    # independent route: Gaussian conditioning on the joint of (g, observed log A)
+    y, log_mu, tau, sigma, prior = _case(2)
+    mean, cov = gain_conditional(y, log_mu, tau, sigma, prior)
+    for w in range(4):
+        m, big, c_idx, _ = _dense(y, log_mu[w], tau[w], sigma[w], prior)
+        a = (c_idx[:, None] == np.arange(3)[None, :]).astype(float)     # (n, C)
+        cross = prior.sd**2 * a.T                                        # Cov(g, log A)
+        gain = cross @ np.linalg.inv(big)
+        ref_mean = prior.mean + gain @ (y[np.isfinite(y)] - m)
+        ref_cov = prior.sd**2 * np.eye(3) - gain @ cross.T
+        np.testing.assert_allclose(mean[w], ref_mean, atol=1e-9)
+        np.testing.assert_allclose(cov[w], ref_cov, atol=1e-10)
 
 
 def test_unobserved_points_drop_out_and_failed_sweeps_are_impossible() -> None:
-    y, log_mu, sigma, prior = _case(4)
+    y, log_mu, tau, sigma, prior = _case(4)
     keep = np.isfinite(y).any(axis=0)
-    a = marginal_log_likelihood(y, log_mu, sigma, prior)
-    b = marginal_log_likelihood(y[:, keep], log_mu[:, keep], sigma, prior)
-    np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+    a = marginal_log_likelihood(y, log_mu, tau, sigma, prior)
+    b = marginal_log_likelihood(y[:, keep], log_mu[:, keep], tau, sigma, prior)
+    np.testing.assert_allclose(a, b, rtol=0, atol=1e-9)
     bad = log_mu.copy()
     bad[0, 7] = np.nan          # at the bridging point: no effect
     bad[1, 0] = -np.inf         # at an observed point: impossible
-    out = marginal_log_likelihood(y, bad, sigma, prior)
+    out = marginal_log_likelihood(y, bad, tau, sigma, prior)
     assert out[0] == pytest.approx(a[0]) and out[1] == -np.inf and out[2] == a[2]
-    assert marginal_log_likelihood(y, log_mu, np.array([0.1, 0.0, 0.2]), prior)[1] == -np.inf
+    zero = marginal_log_likelihood(y, log_mu, tau, np.array([0.1, 0.0, 0.2, 0.1]), prior)
+    assert zero[1] == -np.inf and np.isfinite(zero[[0, 2, 3]]).all()
+    assert marginal_log_likelihood(y, log_mu, np.array([0.1, -0.1, 0.1, 0.1]), sigma,
+                                   prior)[1] == -np.inf
     with pytest.raises(ValueError, match="shapes"):
-        marginal_log_likelihood(y, log_mu[:, :3], sigma, prior)
+        marginal_log_likelihood(y, log_mu[:, :3], tau, sigma, prior)
     with pytest.raises(ValueError, match="sd > 0"):
         GainPrior(0.0, 0.0)
 
 
-def test_the_gain_is_recovered_from_noise_free_curves() -> None:
+def test_the_gains_are_recovered_from_noise_free_curves() -> None:
     log_mu = np.log(np.linspace(1.0, 30.0, 50))[None, :]
     y = np.log([[0.004], [0.02]]) + log_mu
-    mean, sd = gain_conditional(y, log_mu, np.array([0.05]), GainPrior(math.log(0.01), 3.0))
+    mean, cov = gain_conditional(y, log_mu, np.array([0.1]), np.array([0.01]),
+                                 GainPrior(math.log(0.01), 3.0))
     np.testing.assert_allclose(np.exp(mean[0]), [0.004, 0.02], rtol=1e-3)
-    assert np.all(sd < 0.01)
+    # the shared error moves both gains together: their difference is the better known
+    sd = np.sqrt(np.diag(cov[0]))
+    sd_diff = math.sqrt(cov[0, 0, 0] + cov[0, 1, 1] - 2 * cov[0, 0, 1])
+    assert np.all(sd < 0.03) and sd_diff < 0.5 * sd.min()
 
 
 def test_acceleration_arms_weights_harmonic_h_by_h_to_the_fourth() -> None:
