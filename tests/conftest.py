@@ -24,6 +24,9 @@ def realdata() -> Path:
 #: Test folders whose session fixtures (a whole pipeline run, a calibration) several files share:
 #: under pytest-xdist each runs on one worker, so those fixtures are computed once.
 SHARED_FIXTURE_FOLDERS = ("calibration", "pipeline", "report")
+#: Files in those folders that use none of the shared fixtures and are long on their own (the
+#: run-up calibrations): each is its own group, so they run beside the folder, not after it.
+OWN_GROUP_FILES = ("calibration/test_sbc_runup.py", "calibration/test_runup_calibration.py")
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
@@ -38,5 +41,6 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
         except ValueError:      # doctests of the packages
             rel = path
         top = rel.parts[0] if len(rel.parts) > 1 else ""
-        group = top if top in SHARED_FIXTURE_FOLDERS else rel.as_posix()
+        own = rel.as_posix() in OWN_GROUP_FILES or top not in SHARED_FIXTURE_FOLDERS
+        group = rel.as_posix() if own else top
         item.add_marker(pytest.mark.xdist_group(name=group))
