@@ -408,7 +408,7 @@ def _representative(x: np.ndarray, group: np.ndarray) -> int:
     return int(group[np.argmin(np.abs(x[group] - np.median(x[group])))])
 
 
-def _bin(p: _Points, max_points: int) -> tuple[_Points, list[str]]:
+def _thin(p: _Points, max_points: int) -> tuple[_Points, list[str]]:
     """Each direction thinned to about ``max_points`` windows (module notes)."""
     stretches = _stretches(p.direction)
     totals: dict[str, int] = {}
@@ -593,7 +593,7 @@ def prepare_runup(observations: pd.DataFrame, run_id: str, gear_set: str,
         raise RunUpDataError(f"the mesh frequency spans {pts.f.min():.0f}-{pts.f.max():.0f} Hz "
                              f"(max/min {ratio:.3g}), less than min_span = {cfg.min_span:g} "
                              "([calibration.runup]): not a run-up", run=run_id)
-    pts, bin_notes = _bin(pts, cfg.max_speed_points)
+    pts, bin_notes = _thin(pts, cfg.max_speed_points)
     pts, gap_notes = _bridge(pts, run_id)
     return RunUpCurve(
         run_id=str(run_id), gear_set=gear_set, torque_Nm=float(np.median(torque)),
