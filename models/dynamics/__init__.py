@@ -4,8 +4,12 @@
   FVMS / VVMS / LSTE models built from a :func:`~models.stiffness.mesh_cycle.mesh_cycle`;
 * :mod:`models.dynamics.integrate`: a model's tables, periods and settling to a periodic
   steady state from Python, with plain-Python and solve_ivp references;
-* :mod:`models.dynamics.sdof_kernels`: every compiled SDOF/ITMS kernel (RK4, settling and
-  period detection, sweeps) in one file, so numba's disk cache cannot go stale across files;
+* :mod:`models.dynamics.sdof_kernels`: the compiled SDOF/ITMS kernels (RK4, settling and
+  period detection, recording, sweeps);
+* :mod:`models.dynamics.walker_kernels`: the compiled walker sweeps (Newton shooting on the
+  period-1 map with its basin check), their disk cache tied to ``sdof_kernels``;
+* :mod:`models.dynamics.kernel_cache`: :func:`~models.dynamics.kernel_cache.tie_cache`, which
+  flushes a module's cached kernels when a file they inline changes;
 * :mod:`models.dynamics.sweep`: up/down frequency sweeps with Arms, contact flags and period
   detection, and the hysteresis (jump) bands where the up and down branches differ;
 * :mod:`models.dynamics.itms`: the ITMS model (seed 003 Eq. 28), one dead-zone spring per tooth

@@ -109,8 +109,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from models.dynamics.sdof import SDOFModel, sdof_from_mesh_cycle
-from models.dynamics.sdof_kernels import walker_sweep_kernel
 from models.dynamics.sweep import sweep
+from models.dynamics.walker_kernels import walker_sweep_kernel
 from models.errors import ModelError
 from models.geometry.gear_pair import GearPair
 from models.geometry.inertia import pair_equivalent_mass
