@@ -25,9 +25,12 @@ Steps (issue 20):
    to the autocorrelation rule with the unchanged :func:`~rigtools.calibration.sampler.run_sampler`,
    resumable from ``<outdir>/runup/chains.h5`` (group ``runup-<model>``).
 3. From at most :data:`~rigtools.calibration.runup_outputs.MAX_STORED_DRAWS` posterior draws:
-   the gains drawn from their exact conditional, the pointwise log-likelihood per (run,
-   point) with its channels together (they share the model error), the posterior predictive
-   Arms bands and the jump frequencies.
+   the gains drawn from their exact conditional, the leave-one-out log density per (run,
+   point) with its channels together (they share the model error; the exact Gaussian
+   conditional given the rest of the run, the model being non-factorised:
+   :func:`~rigtools.calibration.runup_likelihood.pointwise_log_likelihood`) and per block
+   (:func:`loo_blocks`), the posterior predictive Arms bands (the model error drawn along the
+   run as it is modelled) and the jump frequencies.
 4. Summary per model (:func:`~rigtools.calibration.runup_summary.runup_summary`): every
    parameter with its quantiles, ESS, R-hat and ``identified`` (posterior sd under the prior
    sd divided by ``[calibration.tolerances] min_narrowing``); a parameter the data do not
@@ -36,11 +39,11 @@ Steps (issue 20):
    natural frequency, overall and per run, with a warning for a run whose ramp does not
    reach it.
 5. The models are compared by PSIS-LOO (:func:`~rigtools.calibration.comparison.
-   compare_variants`: elpd differences with their standard errors, Pareto k). Neighbouring
-   points of a curve are correlated (a jump one point off moves two residuals), which makes
-   the pointwise se of the differences optimistic; the same comparison over blocks of
-   :data:`BLOCK_POINTS` neighbouring points of one run and direction (all channels) is
-   reported beside it, and the statement gives both.
+   compare_variants`: elpd differences with their standard errors, Pareto k). The se of a
+   difference sums pointwise terms as if independent, and neighbouring points are not (a jump
+   one point off moves two residuals); the same comparison leaving out blocks of
+   :data:`BLOCK_POINTS` neighbouring points of one stretch (all channels, the block's exact
+   left-out density) is reported beside it, and the statement gives both.
 
 Randomness: one integer ``seed`` (``[calibration] seed`` unless given) drives the MAP, the
 walkers, the sampler, the gain draws and the predictive noise.
@@ -78,7 +81,11 @@ from rigtools.calibration.runup_forward import (
     build_forward,
     jump_frequencies,
 )
-from rigtools.calibration.runup_likelihood import gain_conditional, pointwise_log_likelihood
+from rigtools.calibration.runup_likelihood import (
+    gain_conditional,
+    pointwise_log_likelihood,
+    sample_model_error,
+)
 from rigtools.calibration.runup_map import find_runup_map
 from rigtools.calibration.runup_model import RunUpPosterior, build_posterior
 from rigtools.calibration.runup_outputs import (
@@ -98,6 +105,7 @@ __all__ = [
     "CHECKPOINT_FILE",
     "calibrate_runup_data",
     "calibrate_runups",
+    "loo_blocks",
 ]
 
 #: The chains' checkpoint file in ``<outdir>/runup/``.
@@ -167,19 +175,30 @@ def _fit_model(post: RunUpPosterior, config: CalibrationConfig, *, seed: int, in
     o_run, o_chan, o_pt, l_run, l_pt = [], [], [], [], []
     predictive = []
     any_impact = np.zeros(m, dtype=bool)
-    for r, (curve, y, sw) in enumerate(zip(fwd.curves, post.log_observed, sweeps, strict=True)):
-        mean, cov = gain_conditional(y, sw.log_mu, tau, sigma, post.gain_prior)
+    ell = p["model_error_length"]
+    blk_parts, b_run = [], []
+    for r, (curve, y, gaps, sw) in enumerate(zip(fwd.curves, post.log_observed, post.gaps,
+                                                 sweeps, strict=True)):
+        mean, cov = gain_conditional(y, sw.log_mu, tau, sigma, post.gain_prior,
+                                     error_length=ell, gaps=gaps)
         chol = np.linalg.cholesky(cov)
         g = mean + np.einsum("mcd,md->mc", chol, rng.standard_normal(mean.shape))  # (M, C)
         gains.append(g)
         labels += [f"{curve.run_id}/{c}" for c in curve.channels]
-        pw = pointwise_log_likelihood(y, sw.log_mu, tau, sigma, g)          # (M, N)
+        pw = pointwise_log_likelihood(y, sw.log_mu, tau, sigma, post.gain_prior,
+                                      error_length=ell, gaps=gaps)
         seen = np.flatnonzero(np.isfinite(y).any(axis=0))
         ll_parts.append(pw[:, seen])
         l_run.append(np.full(seen.size, r))
         l_pt.append(seen)
+        blocks = loo_blocks(curve.direction)
+        pb = pointwise_log_likelihood(y, sw.log_mu, tau, sigma, post.gain_prior,
+                                      error_length=ell, gaps=gaps, groups=blocks)
+        kept = ~np.isnan(pb).all(axis=0)
+        blk_parts.append(pb[:, kept])
+        b_run.append(np.full(int(kept.sum()), r))
         cc, ii = np.nonzero(np.isfinite(y))
-        noise = (tau[:, None, None] * rng.standard_normal((m, 1, y.shape[1]))
+        noise = (sample_model_error(tau, ell, gaps, rng)[:, None, :]
                  + sigma[:, None, None] * rng.standard_normal((m, *y.shape)))
         with np.errstate(over="ignore", invalid="ignore"):
             arms = np.exp(g[:, :, None] + sw.log_mu[:, None, :] + noise)    # (M, C, N)
@@ -207,6 +226,7 @@ def _fit_model(post: RunUpPosterior, config: CalibrationConfig, *, seed: int, in
             backside_impact_probability=float(impact.mean()),
             contact_loss_probability=float(sw.contact_loss.any(axis=1).mean())))
     log_lik = np.concatenate(ll_parts, axis=1).reshape(w, n, -1)
+    block_lik = np.concatenate(blk_parts, axis=1).reshape(w, n, -1)
     arms_pred = np.concatenate(pred_parts, axis=1).reshape(w, n, -1)
     log_gain = np.concatenate(gains, axis=1).reshape(w, n, -1)
     fit_warn: list[str] = []
@@ -219,23 +239,43 @@ def _fit_model(post: RunUpPosterior, config: CalibrationConfig, *, seed: int, in
         log_likelihood=log_lik, log_gain=log_gain, arms_predictive=arms_pred,
         obs_run=np.concatenate(o_run), obs_channel=np.concatenate(o_chan),
         obs_point=np.concatenate(o_pt), loo_run=np.concatenate(l_run),
-        loo_point=np.concatenate(l_pt), gain_labels=tuple(labels),
+        loo_point=np.concatenate(l_pt), block_log_likelihood=block_lik,
+        block_run=np.concatenate(b_run), gain_labels=tuple(labels),
         predictive=tuple(predictive), summary=summary, warnings=tuple(fit_warn),
         seconds=seconds)
 
 
+def loo_blocks(direction: np.ndarray) -> np.ndarray:
+    """Block label of each point: :data:`BLOCK_POINTS` neighbours of one stretch of one direction.
+
+    Parameters
+    ----------
+    direction : numpy.ndarray
+        ``(N,)`` in time order.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N,)`` labels ``0..B-1`` in time order.
+
+    Examples
+    --------
+    >>> loo_blocks(np.array(["up"] * 12 + ["down"] * 3)).tolist()
+    [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 2, 2, 2]
+    """
+    d = np.asarray(direction, dtype=object)
+    out = np.empty(d.size, dtype=np.int64)
+    label, count = -1, 0
+    for i in range(d.size):
+        if i == 0 or d[i] != d[i - 1] or count == BLOCK_POINTS:
+            label, count = label + 1, 0
+        out[i] = label
+        count += 1
+    return out
+
+
 def _loo_data(fit: RunUpFit, *, blocked: bool) -> az.InferenceData:
-    ll = fit.log_likelihood
-    if blocked:
-        curves = fit.posterior.forward.curves
-        keys = []
-        for r, i in zip(fit.loo_run, fit.loo_point, strict=True):
-            d = np.asarray(curves[r].direction)
-            same = np.flatnonzero(d == d[i])
-            keys.append((int(r), str(d[i]), int(np.searchsorted(same, i)) // BLOCK_POINTS))
-        uniq = sorted(set(keys))
-        idx = np.array([uniq.index(k) for k in keys])
-        ll = np.stack([ll[..., idx == b].sum(axis=-1) for b in range(len(uniq))], axis=-1)
+    ll = fit.block_log_likelihood if blocked else fit.log_likelihood
     with warnings.catch_warnings():
         # "more chains than draws": emcee has many walkers and few thinned draws each
         warnings.filterwarnings("ignore", message="More chains")
@@ -249,11 +289,12 @@ def _statement(fits: Mapping[str, RunUpFit], point: ModelComparison | None,
         return "no model fitted."
     if len(fits) < 2:
         return f"only {next(iter(fits))} fitted; nothing to compare."
-    text = f"Pointwise PSIS-LOO (one observation per run, channel and point): {point.statement}"
+    text = ("Pointwise PSIS-LOO (one term per run and point, its channels together): "
+            f"{point.statement}")
     if block is not None:
         text += (f" Blocked check (blocks of {BLOCK_POINTS} neighbouring points of one run and "
-                 "direction, all channels; pointwise LOO treats correlated neighbours as "
-                 f"independent, so its se can be too small): {block.statement}")
+                 "direction left out together, all channels; the se of a pointwise difference "
+                 f"treats neighbours as independent and can be too small): {block.statement}")
         if point.favoured is not None and block.favoured != point.favoured:
             text += (" The blocked check does not confirm the pointwise preference: read the "
                      "difference as suggestive only.")

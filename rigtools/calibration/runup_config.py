@@ -22,6 +22,7 @@ the defaults)::
     backlash = {dist = "uniform", lower = 0.0, upper = 300.0}   # um, total 2b
     gain = {dist = "lognormal", median = 0.01, sigma = 3.0}     # must be lognormal
     model_error = {dist = "halfnormal", sd = 0.3}
+    model_error_length = {dist = "lognormal", median = 0.05, sigma = 1.5}
     channel_error = {dist = "halfnormal", sd = 0.3}
 
     [calibration.runup.fixed]
@@ -55,6 +56,14 @@ tolerances, ``check_every``, ``seed`` and the equivalent-mass keys apply to it t
     ``tau``: standard deviation of ``log Arms`` about the model **shared by every channel at a
     point** (each channel sees the one DTE through its own gain, so where the model is off it
     is off on all of them): the relative model error. Default halfnormal(sd 0.3).
+``model_error_length`` (1)
+    ``ell``: correlation length of the model error along each sweep, in ``ln f_m`` (relative
+    frequency): neighbouring points ``Delta ln f_m`` apart in one stretch of one direction are
+    correlated by ``exp(-Delta / ell)`` (:mod:`rigtools.calibration.runup_likelihood`). A model
+    that is off is off over a band: a steady-state model against a ramp over the resonance's
+    half-power band (``2 zeta``), a wrong stiffness form over wider ones. Default
+    lognormal(median 0.05, sigma 1.5): 95 % in [0.003, 0.9]. Fix it at 0 for independent
+    points.
 ``channel_error`` (1)
     ``sigma``: standard deviation of each channel's own ``log Arms`` error (sensor noise, the
     order-spectrum floor, a transfer path that is not quite flat). Default halfnormal(sd 0.3).
@@ -120,6 +129,11 @@ RUNUP_PARAMETERS: Final[dict[str, ParameterInfo]] = {
         "1", (0.0, math.inf), prior_from_mapping({"dist": "halfnormal", "sd": 0.3}),
         "tau: sd of log Arms about the model shared by every channel at a point (relative "
         "model error)"),
+    "model_error_length": ParameterInfo(
+        "1", (0.0, math.inf), prior_from_mapping({"dist": "lognormal", "median": 0.05,
+                                                  "sigma": 1.5}),
+        "ell: correlation length of the model error along a sweep, in ln f_m (0: independent "
+        "points)"),
     "channel_error": ParameterInfo(
         "1", (0.0, math.inf), prior_from_mapping({"dist": "halfnormal", "sd": 0.3}),
         "sigma: sd of each channel's own log Arms error (noise, floor, transfer path)"),

@@ -35,6 +35,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Final
 
 import numpy as np
@@ -266,6 +267,11 @@ class RunUpForward:
     banks: tuple[CycleBank, ...]
     steps_per_period: int
 
+    @cached_property
+    def paths(self) -> tuple[WindowPath, ...]:
+        """The swept path of every curve (:func:`window_path`), built once."""
+        return tuple(window_path(c) for c in self.curves)
+
     @property
     def scale_range(self) -> tuple[float, float]:
         """Stiffness scales every bank covers (outside: no model)."""
@@ -281,8 +287,7 @@ class RunUpForward:
         e = np.ascontiguousarray(fluctuation_scale, dtype=float)
         b = np.ascontiguousarray(backlash_m, dtype=float)
         out = []
-        for curve, bank in zip(self.curves, self.banks, strict=True):
-            path = window_path(curve)
+        for path, bank in zip(self.paths, self.banks, strict=True):
             sw = sweep_walkers(bank, path.mesh_frequency_Hz, zeta=z, stiffness_scale=s,
                                fluctuation_scale=e, backlash_m=b,
                                steps_per_period=self.steps_per_period)

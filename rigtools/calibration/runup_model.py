@@ -3,7 +3,8 @@ r"""The log posterior of one SDOF model against every run-up curve, vectorised o
 Free parameters (``[calibration.runup.priors]``, in this order, those not fixed by
 ``[calibration.runup.fixed]``): ``zeta`` (1), ``mesh_stiffness_scale`` (1),
 ``fluctuation_scale`` (1), ``backlash`` (um, total ``2b``), ``model_error`` (1: the error
-shared by the channels at a point) and ``channel_error`` (1: each channel's own). The channel
+shared by the channels at a point), ``model_error_length`` (1: its correlation length along a
+sweep, in ``ln f_m``) and ``channel_error`` (1: each channel's own). The channel
 gains are marginalised (:mod:`rigtools.calibration.runup_likelihood`), one per channel and
 run, all with the ``gain`` prior.
 
@@ -25,14 +26,18 @@ import numpy as np
 from rigtools.calibration.priors import Prior
 from rigtools.calibration.runup_config import RunUpSettings
 from rigtools.calibration.runup_forward import RunSweep, RunUpForward
-from rigtools.calibration.runup_likelihood import GainPrior, marginal_log_likelihood
+from rigtools.calibration.runup_likelihood import (
+    GainPrior,
+    error_gaps,
+    marginal_log_likelihood,
+)
 
 __all__ = ["MICROMETRE", "RunUpPosterior", "build_posterior"]
 
 #: Metres per micrometre (backlash in the configuration and summaries is in um).
 MICROMETRE = 1e-6
 _SWEPT = ("zeta", "mesh_stiffness_scale", "fluctuation_scale", "backlash", "model_error",
-          "channel_error")
+          "model_error_length", "channel_error")
 
 
 @dataclass(frozen=True, eq=False)
@@ -52,6 +57,9 @@ class RunUpPosterior:
         Prior of ``log G_c``.
     log_observed : tuple of numpy.ndarray
         ``log Arms`` per curve, ``(C, N)``, NaN where not observed.
+    gaps : tuple of numpy.ndarray
+        Per curve, ``(N - 1,)`` ``ln f_m`` steps between neighbouring points over which the
+        model error is correlated (:func:`~rigtools.calibration.runup_likelihood.error_gaps`).
     notes : tuple of str
     """
 
@@ -61,6 +69,7 @@ class RunUpPosterior:
     fixed: dict[str, float]
     gain_prior: GainPrior
     log_observed: tuple[np.ndarray, ...]
+    gaps: tuple[np.ndarray, ...]
     notes: tuple[str, ...] = ()
 
     @property
@@ -104,9 +113,10 @@ class RunUpPosterior:
         sw = self.sweeps(t) if sweeps is None else sweeps
         p = self.unpack(t)
         ll = np.zeros(t.shape[0])
-        for y, s in zip(self.log_observed, sw, strict=True):
+        for y, gaps, s in zip(self.log_observed, self.gaps, sw, strict=True):
             ll = ll + marginal_log_likelihood(y, s.log_mu, p["model_error"],
-                                              p["channel_error"], self.gain_prior)
+                                              p["channel_error"], self.gain_prior,
+                                              error_length=p["model_error_length"], gaps=gaps)
         return np.where(np.isnan(ll), -np.inf, ll)
 
     def __call__(self, theta: np.ndarray) -> np.ndarray:
@@ -157,5 +167,7 @@ def build_posterior(forward: RunUpForward, settings: RunUpSettings) -> RunUpPost
         logs = tuple(np.where(np.asarray(c.observed, dtype=float) > 0,
                               np.log(np.where(np.asarray(c.observed) > 0, c.observed, 1.0)),
                               np.nan) for c in forward.curves)
+    gaps = tuple(error_gaps(c.mesh_frequency_Hz, c.direction) for c in forward.curves)
     return RunUpPosterior(forward=forward, names=tuple(names), priors=tuple(priors),
-                          fixed=fixed, gain_prior=gain, log_observed=logs, notes=tuple(notes))
+                          fixed=fixed, gain_prior=gain, log_observed=logs, gaps=gaps,
+                          notes=tuple(notes))

@@ -16,13 +16,16 @@ Files (:func:`write_runup_outputs`, under ``<calibration dir>/runup/``, the pipe
     walkers, draws thinned to at most :data:`MAX_STORED_DRAWS` in all),
     ``mesh_natural_frequency_Hz``, ``model_natural_frequency_Hz`` over ``run``, ``log_gain``
     over ``run_channel`` (drawn from its exact conditional). ``log_likelihood``:
-    ``arms_point`` over ``point``, one per observed (run, point), its channels together (they
-    share the model error; :mod:`rigtools.calibration.runup_likelihood`).
-    ``posterior_predictive``: ``arms`` over ``obs`` (model, gain, the shared and the channel's
-    log-normal errors). ``observed_data``: ``arms``. ``constant_data``: per ``obs`` its
-    ``run``, ``channel``, ``point``, mesh frequency, direction and torque; per ``point`` its
-    ``point_run`` and ``point_index``. ``sample_stats``: ``lp``. Attributes: the
-    configuration (JSON), the model, convergence, sampler settings, rigtools version.
+    ``arms_point`` over ``point``, the leave-one-out log density of each observed (run, point),
+    its channels together (they share the model error; the model is not factorised, so these
+    are the exact Gaussian conditionals given the rest of the run:
+    :mod:`rigtools.calibration.runup_likelihood`); what arviz's ``loo`` takes.
+    ``posterior_predictive``: ``arms`` over ``obs`` (model, gain, the shared model error drawn
+    along the run, the channel's error; log-normal). ``observed_data``: ``arms``.
+    ``constant_data``: per ``obs`` its ``run``, ``channel``, ``point``, mesh frequency,
+    direction and torque; per ``point`` its ``point_run`` and ``point_index``.
+    ``sample_stats``: ``lp``. Attributes: the configuration (JSON), the model, convergence,
+    sampler settings, rigtools version.
 ``<model>/summary.json``
     Parameters (mean, sd, q05, q50, q95, ess_bulk, r_hat, identified, prior; the interval
     left null with a statement when the data do not identify the parameter), derived
@@ -156,7 +159,8 @@ class RunUpFit:
     log_prob : numpy.ndarray
         ``(W, n)``.
     log_likelihood : numpy.ndarray
-        ``(W, n, U)`` pointwise, one per observed (run, point), all its channels together.
+        ``(W, n, U)`` leave-one-out log density, one per observed (run, point), all its
+        channels together.
     log_gain : numpy.ndarray
         ``(W, n, G)`` drawn from the exact conditional, ``G`` = (run, channel) pairs.
     arms_predictive : numpy.ndarray
@@ -165,6 +169,11 @@ class RunUpFit:
         ``(O,)`` index of the run (into ``posterior.forward.curves``), channel and point.
     loo_run, loo_point : numpy.ndarray
         ``(U,)`` index of the run and point of each ``log_likelihood`` term.
+    block_log_likelihood : numpy.ndarray
+        ``(W, n, B)`` leave-one-out log density of each observed block of neighbouring points
+        (:func:`~rigtools.calibration.runup_api.loo_blocks`).
+    block_run : numpy.ndarray
+        ``(B,)`` index of each block's run.
     gain_labels : tuple of str
         ``"<run>/<channel>"`` for the ``G`` gains.
     predictive : tuple of RunPredictive
@@ -189,6 +198,8 @@ class RunUpFit:
     obs_point: np.ndarray
     loo_run: np.ndarray
     loo_point: np.ndarray
+    block_log_likelihood: np.ndarray
+    block_run: np.ndarray
     gain_labels: tuple[str, ...]
     predictive: tuple[RunPredictive, ...]
     summary: dict[str, Any]

@@ -77,8 +77,10 @@ def _conventions(forward: RunUpForward) -> dict[str, Any]:
         "observation_model": "Arms_c = G_c (2 pi f_m)^2 sqrt(sum_h h^4 D_h^2), D_h the peak "
                              "DTE amplitude of mesh harmonic h (m), power-averaged over the "
                              "window's nodes (Hann^2 weights); log Arms error = a term shared "
-                             "by the channels at a point (sd model_error) + each channel's "
-                             "own (sd channel_error); log G_c marginalised (prior: gain)",
+                             "by the channels at a point (sd model_error; correlated "
+                             "exp(-|d ln f_m| / model_error_length) between neighbouring "
+                             "points of one direction) + each channel's own (sd "
+                             "channel_error); log G_c marginalised (prior: gain)",
         "stiffness_scale": "exact: the model with compliance C/s is the mesh cycle at T/s "
                            "with k_ref = s kbar_F0",
     }

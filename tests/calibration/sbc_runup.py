@@ -1,7 +1,8 @@
 """Simulation-based calibration of the SDOF run-up calibration (Talts et al. 2018).
 
 Each simulation draws ``zeta``, the stiffness scale ``s``, the model error (shared by the
-channels at a point), the channel error and one gain per channel from the default
+channels at a point, correlated along the sweep over its length), its correlation length, the
+channel error and one gain per channel from the default
 ``[calibration.runup]`` priors (the backlash fixed at 136 um, so that no draw depends on a
 parameter a run-up without back-side impact cannot identify; the fluctuation scale at its
 default 1), sweeps a VVMS run-up of the Kahraman-Blankenship pair
@@ -9,7 +10,7 @@ at 300 N m over ``0.6-1.45`` times the true natural frequency, up then down, wit
 per-walker sweep (:func:`models.dynamics.walkers.sweep_walkers_reference`: not the compiled
 kernel the calibration uses), multiplies by the gains and the two log-normal errors, fits it
 with :func:`rigtools.calibration.runup_api.calibrate_runup_data` and records, for ``zeta``,
-the mesh natural frequency ``f_n`` and the two errors: whether the central 90 % interval
+the mesh natural frequency ``f_n`` and the three error parameters: whether the central 90 % interval
 covers the truth and the rank of the truth among ``L = 99`` evenly spaced posterior draws.
 
 Checks (:func:`check`): 90 % coverage in [0.85, 0.95]; the rank histogram (10 bins) passes a
@@ -48,24 +49,29 @@ from rigtools.calibration.runup_api import calibrate_runup_data
 from rigtools.calibration.runup_config import RunUpSettings
 from rigtools.calibration.runup_data import RunUpCurve, RunUpData
 from rigtools.calibration.runup_forward import acceleration_arms, window_path
+from rigtools.calibration.runup_likelihood import error_gaps, sample_model_error
 
 GEAR_SET = "kahraman-blankenship"
 TORQUE_NM = 300.0
 BACKLASH_UM = 136.0
 CHANNELS = ("accel_x", "accel_y", "accel_z")
-QUANTITIES = ("zeta", "mesh_natural_frequency_Hz", "model_error", "channel_error")
+QUANTITIES = ("zeta", "mesh_natural_frequency_Hz", "model_error", "model_error_length",
+              "channel_error")
+_DRAWN = ("zeta", "mesh_stiffness_scale", "model_error", "model_error_length", "channel_error")
 
 
 def simulate_curve(kind: str, torque_Nm: float, *, zeta: float, stiffness_scale: float,
                    gains: Sequence[float], model_error: float, seed: int,
-                   channel_error: float = 0.0,
+                   channel_error: float = 0.0, model_error_length: float = 0.0,
                    points_per_direction: int = 40, span: tuple[float, float] = (0.6, 1.45),
                    backlash_um: float = BACKLASH_UM, fluctuation_scale: float = 1.0,
                    run_id: str = "sim", channels: Sequence[str] = CHANNELS) -> RunUpCurve:
     """A synthetic run-up: the plain sweep of ``kind``, times the gains, log-normal errors.
 
-    ``log A_ci = log G_c + log mu_i + model_error delta_i + channel_error e_ci`` with
-    ``delta``, ``e`` standard Normal (``delta`` shared by the channels at a point).
+    ``log A_ci = log G_c + log mu_i + delta_i + channel_error e_ci`` with ``e`` standard
+    Normal and ``delta`` shared by the channels at a point, sd ``model_error``, correlated
+    along each direction over ``model_error_length`` in ``ln f_m``
+    (:func:`~rigtools.calibration.runup_likelihood.sample_model_error`; 0: independent).
 
     The path runs from ``span[0]`` to ``span[1]`` times the true natural frequency
     ``sqrt(s kbar_F0 / m_e) / 2 pi`` (log-spaced) and back; the plain sweep runs it as a rig
@@ -94,7 +100,9 @@ def simulate_curve(kind: str, torque_Nm: float, *, zeta: float, stiffness_scale:
     mu = path.power_mean(acceleration_arms(sw.amplitude_m[0], path.mesh_frequency_Hz))
     rng = np.random.default_rng([seed, 7])
     g = np.asarray(gains, dtype=float)[:, None]
-    shared = model_error * rng.standard_normal(f.size)
+    gaps = error_gaps(f, direction)
+    shared = sample_model_error(np.array([model_error]), np.array([model_error_length]), gaps,
+                                rng)[0]
     own = channel_error * rng.standard_normal((len(channels), f.size))
     return replace(curve, observed=g * mu[None, :] * np.exp(shared[None, :] + own))
 
@@ -129,8 +137,7 @@ def one(args: tuple[int, Settings]) -> dict[str, Any]:
     cfg = config_for(settings)
     rng = np.random.default_rng([i, 11])
     ru = cfg.runup
-    draw = {n: float(ru.parameter(n).prior.sample(rng, 1)[0])
-            for n in ("zeta", "mesh_stiffness_scale", "model_error", "channel_error")}
+    draw = {n: float(ru.parameter(n).prior.sample(rng, 1)[0]) for n in _DRAWN}
     while not 0.3 <= draw["mesh_stiffness_scale"] <= 3.0:   # the prior as the banks cut it
         draw["mesh_stiffness_scale"] = float(
             ru.parameter("mesh_stiffness_scale").prior.sample(rng, 1)[0])
@@ -138,13 +145,15 @@ def one(args: tuple[int, Settings]) -> dict[str, Any]:
     pair = load_gear_set(GEAR_SET).pair
     bank = cycle_bank(pair, TORQUE_NM, "vvms")
     truth = {"zeta": draw["zeta"], "model_error": draw["model_error"],
+             "model_error_length": draw["model_error_length"],
              "channel_error": draw["channel_error"],
              "mesh_natural_frequency_Hz": float(bank.natural_frequency_Hz(
                  draw["mesh_stiffness_scale"]))}
     curve = simulate_curve("vvms", TORQUE_NM, zeta=draw["zeta"],
                            stiffness_scale=draw["mesh_stiffness_scale"], gains=gains,
                            model_error=draw["model_error"],
-                           channel_error=draw["channel_error"], seed=i,
+                           channel_error=draw["channel_error"],
+                           model_error_length=draw["model_error_length"], seed=i,
                            points_per_direction=settings.points_per_direction)
     t0 = time.perf_counter()
     try:
@@ -156,6 +165,7 @@ def one(args: tuple[int, Settings]) -> dict[str, Any]:
     post = fit.posterior
     p = post.unpack(fit.run.samples())
     draws = {"zeta": p["zeta"], "model_error": p["model_error"],
+             "model_error_length": p["model_error_length"],
              "channel_error": p["channel_error"],
              "mesh_natural_frequency_Hz": post.forward.natural_frequency_Hz(
                  p["mesh_stiffness_scale"])}

@@ -52,7 +52,7 @@ def test_vvms_truth_is_preferred_to_fvms_and_the_outputs_hold_what_the_figure_ne
                            channel_error=TRUTH["channel_error"], seed=1,
                            points_per_direction=20, run_id="KB-300")
     refusal = "run 'KB-bad': 3 usable speed points, fewer than min_speed_points = 20"
-    res = _fit((curve,), ("vvms", "fvms"), Settings(walkers=10, max_steps=60, map_starts=1),
+    res = _fit((curve,), ("vvms", "fvms"), Settings(walkers=12, max_steps=60, map_starts=1),
                refused={"KB-bad": refusal}, outdir=tmp_path)
     # comparison: VVMS ahead, with the numbers and both checks
     v = res.comparison.variants

@@ -34,6 +34,7 @@ model_error = {dist = "halfnormal", sd = 0.2}
 
 [calibration.runup.fixed]
 backlash = 136.0
+model_error_length = 0.0
 """
 
 
@@ -45,12 +46,14 @@ def test_defaults_have_no_models_and_the_documented_priors() -> None:
     assert (ru.max_speed_points, ru.min_speed_points, ru.min_span, ru.steps_per_period,
             ru.walkers, ru.max_steps) == (100, 20, 1.3, 64, None, None)
     assert ru.free_parameters == ("zeta", "mesh_stiffness_scale", "backlash", "model_error",
-                                  "channel_error")
+                                  "model_error_length", "channel_error")
     assert ru.parameter("fluctuation_scale").fixed == 1.0
     assert ru.parameter("zeta").prior.describe() == "lognormal(median=0.03, sigma=0.7)"
     assert ru.parameter("backlash").prior.describe() == "uniform(0, 300)"
     assert ru.parameter("gain").prior.describe() == "lognormal(median=0.01, sigma=3)"
     assert ru.parameter("model_error").prior.describe() == "halfnormal(sd=0.3)"
+    assert ru.parameter("model_error_length").prior.describe() == \
+        "lognormal(median=0.05, sigma=1.5)"
     assert RUNUP_MODELS == ("fvms", "vvms", "lste")
     assert {p.unit for p in RUNUP_PARAMETERS.values()} <= {"1", "um"}
 
@@ -66,6 +69,7 @@ def test_a_full_block_is_resolved_and_round_trips(
     assert ru.free_parameters == ("zeta", "mesh_stiffness_scale", "fluctuation_scale",
                                   "model_error", "channel_error")
     assert ru.parameter("backlash").fixed == 136.0
+    assert ru.parameter("model_error_length").fixed == 0.0   # independent points
     assert ru.parameter("gain").prior.describe() == "lognormal(median=0.005, sigma=2)"
     again = parse_calibration_block(cfg.to_dict(), source="c", line_of=lambda k: None)
     assert again.to_dict() == cfg.to_dict()

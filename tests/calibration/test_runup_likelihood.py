@@ -1,4 +1,10 @@
-"""The run-up likelihood: gain marginalisation against quadrature, the pointwise terms, jumps."""
+"""The run-up likelihood against dense Gaussians and quadrature; leave-one-out terms; jumps.
+
+Independent routes: the full covariance of every observed ``log A`` built entry by entry
+(white channel error, the shared model error's correlation as the product of the chain's
+``rho`` between two points, the gain prior per channel) with scipy's multivariate Normal and
+Gaussian conditioning; quadrature for the ``tau = 0`` limit.
+"""
 
 from __future__ import annotations
 
@@ -6,14 +12,17 @@ import math
 
 import numpy as np
 import pytest
-from scipy import integrate, stats
+from scipy import integrate, linalg, stats
 
 from rigtools.calibration.runup_forward import acceleration_arms, jump_frequencies
 from rigtools.calibration.runup_likelihood import (
+    MAX_CORRELATION,
     GainPrior,
+    error_gaps,
     gain_conditional,
     marginal_log_likelihood,
     pointwise_log_likelihood,
+    sample_model_error,
 )
 
 
@@ -30,16 +39,44 @@ def _case(seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray
     return y, log_mu, tau, sigma, GainPrior(math.log(0.02), 1.5)
 
 
+#: Nine points: an up stretch of five, a down stretch of four (point 7 unobserved).
+_F = np.array([800.0, 850.0, 930.0, 960.0, 1100.0, 1090.0, 1000.0, 990.0, 870.0])
+_DIR = np.array(["up"] * 5 + ["down"] * 4, dtype=object)
+_ELL = np.array([0.05, 0.3, 0.0, 2.0])     # W 2: independent points
+
+
+def _correlation(gaps: np.ndarray, ell: float) -> np.ndarray:
+    """Correlation of the shared error between every two points: the product of the links."""
+    n = gaps.size + 1
+    rho = np.minimum(np.exp(-gaps / ell), MAX_CORRELATION) if ell > 0 else np.zeros(n - 1)
+    r = np.eye(n)
+    for i in range(n):
+        for j in range(i + 1, n):
+            r[i, j] = r[j, i] = np.prod(rho[i:j])
+    return r
+
+
 def _dense(y: np.ndarray, log_mu: np.ndarray, tau: float, sigma: float,
-           prior: GainPrior) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+           prior: GainPrior, ell: float = 0.0
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The observed log A as one Normal vector: its mean, covariance, and the index maps."""
     c_idx, i_idx = np.nonzero(np.isfinite(y))
-    same_point = i_idx[:, None] == i_idx[None, :]
+    corr = _correlation(error_gaps(_F[:y.shape[1]], _DIR[:y.shape[1]]), ell)
     same_channel = c_idx[:, None] == c_idx[None, :]
-    cov = (sigma**2 * np.eye(c_idx.size) + tau**2 * same_point
+    cov = (sigma**2 * np.eye(c_idx.size) + tau**2 * corr[np.ix_(i_idx, i_idx)]
            + prior.sd**2 * same_channel)
     mean = prior.mean + log_mu[i_idx]
     return mean, cov, c_idx, i_idx
+
+
+def _conditional(mean: np.ndarray, cov: np.ndarray, x: np.ndarray, out: np.ndarray) -> float:
+    """The log density of x[out] given x[rest] under N(mean, cov), by conditioning."""
+    rest = np.setdiff1d(np.arange(x.size), out)
+    fac = linalg.cho_factor(cov[np.ix_(rest, rest)])
+    k = linalg.cho_solve(fac, cov[np.ix_(rest, out)]).T
+    m = mean[out] + k @ (x[rest] - mean[rest])
+    c = cov[np.ix_(out, out)] - k @ cov[np.ix_(rest, out)]
+    return float(stats.multivariate_normal(m, c).logpdf(x[out]))
 
 
 def _quad(y: np.ndarray, log_mu: np.ndarray, sigma: float, prior: GainPrior) -> float:
@@ -65,16 +102,22 @@ def _quad(y: np.ndarray, log_mu: np.ndarray, sigma: float, prior: GainPrior) -> 
     return total
 
 
-def test_marginal_matches_the_dense_multivariate_normal() -> None:
-    # independent route: the full covariance sigma^2 I + tau^2 (same point) + s0^2 (same
-    # channel) of every observed value, and scipy's multivariate Normal
+@pytest.mark.parametrize("correlated", [False, True])
+def test_marginal_matches_the_dense_multivariate_normal(correlated: bool) -> None:
+    # independent route: the full covariance of every observed value, scipy's Normal
+    gaps = error_gaps(_F, _DIR)
     for seed in range(3):
         y, log_mu, tau, sigma, prior = _case(seed)
-        ll = marginal_log_likelihood(y, log_mu, tau, sigma, prior)
+        ell = _ELL if correlated else np.zeros(4)
+        ll = marginal_log_likelihood(y, log_mu, tau, sigma, prior, error_length=ell, gaps=gaps)
         for w in range(4):
-            mean, cov, c_idx, i_idx = _dense(y, log_mu[w], tau[w], sigma[w], prior)
+            mean, cov, c_idx, i_idx = _dense(y, log_mu[w], tau[w], sigma[w], prior, ell[w])
             ref = stats.multivariate_normal(mean, cov).logpdf(y[c_idx, i_idx])
             assert ll[w] == pytest.approx(ref, abs=1e-8)
+    if not correlated:     # no length, or no gaps: the independent model
+        np.testing.assert_array_equal(
+            marginal_log_likelihood(y, log_mu, tau, sigma, prior),
+            marginal_log_likelihood(y, log_mu, tau, sigma, prior, error_length=_ELL))
 
 
 def test_without_the_shared_error_it_is_the_independent_model_by_quadrature() -> None:
@@ -85,49 +128,49 @@ def test_without_the_shared_error_it_is_the_independent_model_by_quadrature() ->
         assert ll[w] == pytest.approx(_quad(y, log_mu[w], float(sigma[w]), prior), abs=1e-7)
 
 
-def _mvn_logpdf(x: np.ndarray, mean: np.ndarray, cov: np.ndarray) -> np.ndarray:
-    return np.array([stats.multivariate_normal(m, c).logpdf(v)
-                     for v, m, c in zip(x, mean, cov, strict=True)])
-
-
-def test_bayes_identity_ties_the_pointwise_terms_to_the_marginal() -> None:
-    """Log p(y|theta) = sum_i log p(y_i|g) + log p(g) - log p(g|y, theta), for any g."""
+def test_leave_one_out_terms_are_the_dense_gaussian_conditionals() -> None:
+    """Per point (channels together) and per block: log p(r_B | r_rest) by conditioning."""
     y, log_mu, tau, sigma, prior = _case(1)
-    ll = marginal_log_likelihood(y, log_mu, tau, sigma, prior)
-    mean, cov = gain_conditional(y, log_mu, tau, sigma, prior)
-    rng = np.random.default_rng(3)
-    c = y.shape[0]
-    for _ in range(3):
-        g = mean + rng.normal(0.0, 0.3, mean.shape)             # any gain, not only the mode
-        pw = pointwise_log_likelihood(y, log_mu, tau, sigma, g)
-        assert pw.shape == (4, 9) and np.isnan(pw[:, 7]).all()
-        rhs = (np.nansum(pw, axis=1)
-               + _mvn_logpdf(g, np.full_like(g, prior.mean),
-                             np.broadcast_to(prior.sd**2 * np.eye(c), cov.shape))
-               - _mvn_logpdf(g, mean, cov))
-        np.testing.assert_allclose(rhs, ll, rtol=0, atol=1e-8)
-
-
-def test_pointwise_terms_are_each_points_multivariate_normal() -> None:
-    y, log_mu, tau, sigma, _ = _case(5)
-    g = np.log([[0.01, 0.03, 0.005]] * 4)
-    pw = pointwise_log_likelihood(y, log_mu, tau, sigma, g)
+    gaps = error_gaps(_F, _DIR)
+    pw = pointwise_log_likelihood(y, log_mu, tau, sigma, prior, error_length=_ELL, gaps=gaps)
+    blocks = np.array([0, 0, 0, 1, 1, 2, 2, 3, 3])       # block 3: point 7 unobserved, and 8
+    pb = pointwise_log_likelihood(y, log_mu, tau, sigma, prior, error_length=_ELL, gaps=gaps,
+                                  groups=blocks)
+    assert pw.shape == (4, 9) and np.isnan(pw[:, 7]).all() and pb.shape == (4, 4)
     for w in range(4):
+        mean, cov, _, i_idx = _dense(y, log_mu[w], tau[w], sigma[w], prior, _ELL[w])
+        x = y[np.isfinite(y)]
         for i in range(9):
-            ok = np.isfinite(y[:, i])
-            if not ok.any():
-                continue
-            cov = sigma[w]**2 * np.eye(ok.sum()) + tau[w]**2
-            ref = stats.multivariate_normal(g[w, ok] + log_mu[w, i], cov).logpdf(y[ok, i])
-            assert pw[w, i] == pytest.approx(ref, abs=1e-10)
+            if i != 7:
+                ref = _conditional(mean, cov, x, np.flatnonzero(i_idx == i))
+                assert pw[w, i] == pytest.approx(ref, abs=1e-8)
+        for b in range(4):
+            ref = _conditional(mean, cov, x, np.flatnonzero(blocks[i_idx] == b))
+            assert pb[w, b] == pytest.approx(ref, abs=1e-8)
+    # without a shared error and with gains known (a tight prior at the truth) the points are
+    # independent and each term is the point's own Normal
+    g = np.log([0.01, 0.03, 0.005])
+    yy = np.where(np.isfinite(y), g[:, None] + log_mu[0][None, :] + 0.01 * np.sin(
+        np.arange(27).reshape(3, 9)), np.nan)
+    tight = GainPrior(0.0, 1e-7)
+    shifted = yy - g[:, None]                           # gains folded into the data
+    own = pointwise_log_likelihood(shifted, log_mu[:1], np.zeros(1), sigma[:1], tight)
+    for i in range(9):
+        ok = np.isfinite(yy[:, i])
+        if ok.any():
+            ref = stats.multivariate_normal(log_mu[0, i] + np.zeros(ok.sum()),
+                                            sigma[0]**2 * np.eye(ok.sum())).logpdf(
+                shifted[ok, i])
+            assert own[0, i] == pytest.approx(ref, abs=1e-6)
 
 
 def test_gain_conditional_is_the_exact_posterior_of_the_gains() -> None:
     # independent route: Gaussian conditioning on the joint of (g, observed log A)
     y, log_mu, tau, sigma, prior = _case(2)
-    mean, cov = gain_conditional(y, log_mu, tau, sigma, prior)
+    mean, cov = gain_conditional(y, log_mu, tau, sigma, prior, error_length=_ELL,
+                                 gaps=error_gaps(_F, _DIR))
     for w in range(4):
-        m, big, c_idx, _ = _dense(y, log_mu[w], tau[w], sigma[w], prior)
+        m, big, c_idx, _ = _dense(y, log_mu[w], tau[w], sigma[w], prior, _ELL[w])
         a = (c_idx[:, None] == np.arange(3)[None, :]).astype(float)     # (n, C)
         cross = prior.sd**2 * a.T                                        # Cov(g, log A)
         gain = cross @ np.linalg.inv(big)
@@ -152,6 +195,13 @@ def test_unobserved_points_drop_out_and_failed_sweeps_are_impossible() -> None:
     assert zero[1] == -np.inf and np.isfinite(zero[[0, 2, 3]]).all()
     assert marginal_log_likelihood(y, log_mu, np.array([0.1, -0.1, 0.1, 0.1]), sigma,
                                    prior)[1] == -np.inf
+    gaps = error_gaps(_F, _DIR)
+    neg = marginal_log_likelihood(y, log_mu, tau, sigma, prior,
+                                  error_length=np.array([0.1, -1.0, 0.1, 0.1]), gaps=gaps)
+    assert neg[1] == -np.inf and np.isfinite(neg[[0, 2, 3]]).all()
+    with pytest.raises(ValueError, match="gaps"):
+        marginal_log_likelihood(y, log_mu, tau, sigma, prior, error_length=_ELL,
+                                gaps=gaps[:3])
     with pytest.raises(ValueError, match="shapes"):
         marginal_log_likelihood(y, log_mu[:, :3], tau, sigma, prior)
     with pytest.raises(ValueError, match="sd > 0"):
@@ -197,3 +247,42 @@ def test_jump_frequencies_per_direction() -> None:
     assert both["down"] == pytest.approx(math.sqrt(2000.0 * 1000.0))
     none = jump_frequencies(y[0], f, np.array(["hold"] * 8, dtype=object))
     assert np.isnan(none["up"]) and np.isnan(none["down"])
+
+
+def test_a_hold_at_one_frequency_is_one_discrepancy() -> None:
+    """Points at one frequency are correlated up to the cap, and stay finite and exact."""
+    f = np.full(6, 1000.0)
+    gaps = error_gaps(f, np.array(["hold"] * 6, dtype=object))
+    assert np.all(gaps == 0.0)
+    rng = np.random.default_rng(7)
+    y = np.log(0.01) + 0.1 * rng.standard_normal((2, 6))
+    log_mu = np.zeros((1, 6))
+    prior = GainPrior(math.log(0.01), 1.0)
+    ll = marginal_log_likelihood(y, log_mu, np.array([0.2]), np.array([0.05]), prior,
+                                 error_length=np.array([0.1]), gaps=gaps)
+    c_idx, i_idx = np.nonzero(np.isfinite(y))
+    corr = np.full((6, 6), MAX_CORRELATION) ** np.abs(np.subtract.outer(range(6), range(6)))
+    cov = (0.05**2 * np.eye(12) + 0.04 * corr[np.ix_(i_idx, i_idx)]
+           + 1.0 * (c_idx[:, None] == c_idx[None, :]))
+    ref = stats.multivariate_normal(prior.mean + np.zeros(12), cov).logpdf(y[c_idx, i_idx])
+    assert ll[0] == pytest.approx(ref, abs=1e-6)
+
+
+def test_error_gaps_break_at_a_change_of_direction() -> None:
+    g = error_gaps(_F, _DIR)
+    assert g.shape == (8,) and math.isinf(g[4]) and np.isfinite(np.delete(g, 4)).all()
+    np.testing.assert_allclose(g[0], math.log(850.0 / 800.0))
+    with pytest.raises(ValueError, match="direction"):
+        error_gaps(_F, _DIR[:4])
+
+
+def test_sampled_model_errors_have_the_modelled_covariance() -> None:
+    """Draws along the chain: sample covariance against tau^2 times the product correlation."""
+    gaps = error_gaps(_F, _DIR)
+    m = 40000
+    tau, ell = 0.3, 0.08
+    d = sample_model_error(np.full(m, tau), np.full(m, ell), gaps, np.random.default_rng(3))
+    ref = tau**2 * _correlation(gaps, ell)
+    # sd of a sample covariance entry <= tau^2 sqrt(2 / m) = 6e-4; 5 sd
+    np.testing.assert_allclose(np.cov(d, rowvar=False), ref, atol=5 * tau**2 * math.sqrt(2 / m))
+    assert abs(np.corrcoef(d[:, 4], d[:, 5])[0, 1]) < 0.02      # up and down independent
