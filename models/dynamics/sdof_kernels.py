@@ -255,14 +255,23 @@ def settle_kernel(
 
 
 @njit(cache=True)
-def _min_below(x0, v0, x1, v1, h, o0, o1, o2):  # pragma: no cover - compiled
+def _min_below(x0, v0, x1, v1, h, o0, o1, o2, above):  # pragma: no cover - compiled
     """Minimum over one step of ``H(t) - o(t)``: ``H`` the cubic Hermite interpolant of ``x``.
 
     ``t`` in [0, 1] over the step; ``o`` linear through ``o0``, ``o1``, ``o2`` at 0, 1/2, 1.
+    The caller only asks whether the minimum is below ``above``: a lower bound that clears it
+    is returned instead of the minimum when one does (the flags are the same).
     """
     lo = min(x0 - o0, x1 - o2)
     if not (math.isfinite(o0) and math.isfinite(o1) and math.isfinite(o2)):
         return lo  # no pair on this side (offset +-inf)
+    # H = h00 x0 + h01 x1 + h (h10 v0 + h11 v1), h00 + h01 = 1 (both in [0, 1]), h10 in
+    # [0, 4/27], h11 in [-4/27, 0]: H - o >= min(x0, x1) - max(o) - (4/27) h (|v0| + |v1|).
+    # When that clears ``above`` (by a margin far beyond round-off) the minimum cannot fall
+    # below it, and the exact search (most of a recorded period's cost) is skipped.
+    bound = min(x0, x1) - max(o0, o1, o2) - (4.0 / 27.0) * h * (abs(v0) + abs(v1))
+    if bound - above > 1e-9 * (1.0 + abs(above) + abs(x0) + abs(x1)):
+        return bound
     c3 = 2.0 * (x0 - x1) + h * (v0 + v1)
     c2 = 3.0 * (x1 - x0) - h * (2.0 * v0 + v1)
     c1 = h * v0
@@ -275,20 +284,19 @@ def _min_below(x0, v0, x1, v1, h, o0, o1, o2):  # pragma: no cover - compiled
         qa = 3.0 * c3
         qb = 2.0 * c2
         qc = c1 - slope
-        roots = np.empty(2)
-        nr = 0
+        # the stationary points (no array: this runs for every step of every recorded period)
+        r0 = math.nan
+        r1 = math.nan
         if abs(qa) > 1e-300:
             disc = qb * qb - 4.0 * qa * qc
             if disc >= 0.0:
                 sq = math.sqrt(disc)
-                roots[0] = (-qb - sq) / (2.0 * qa)
-                roots[1] = (-qb + sq) / (2.0 * qa)
-                nr = 2
+                r0 = (-qb - sq) / (2.0 * qa)
+                r1 = (-qb + sq) / (2.0 * qa)
         elif abs(qb) > 1e-300:
-            roots[0] = -qc / qb
-            nr = 1
-        for r in range(nr):
-            t = roots[r]
+            r0 = -qc / qb
+        for r in range(2):
+            t = r0 if r == 0 else r1
             if t0 < t < t0 + 0.5:
                 xt = ((c3 * t + c2) * t + c1) * t + x0
                 ot = oa + slope * (t - t0)
@@ -405,11 +413,11 @@ def record_kernel(
             j2 = (j0 + 2) % n2
             if not loss:
                 # drive side: no pair touches where x - drive offset < b
-                if _min_below(x, v, xn, vn, h, doff[j0], doff[j0 + 1], doff[j2]) < b:
+                if _min_below(x, v, xn, vn, h, doff[j0], doff[j0 + 1], doff[j2], b) < b:
                     loss = True
             if not impact:
                 # back side: x - back offset < -b
-                if _min_below(x, v, xn, vn, h, boff[j0], boff[j0 + 1], boff[j2]) < -b:
+                if _min_below(x, v, xn, vn, h, boff[j0], boff[j0 + 1], boff[j2], -b) < -b:
                     impact = True
             x, v = xn, vn
             xlo = min(xlo, x)

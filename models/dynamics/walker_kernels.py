@@ -16,7 +16,13 @@ Newton shooting runs RK4 on the state and its 2 x 2 variational equations
 kernel's to the bit) and accepts a fixed point on its residual, Jury stability of the
 monodromy matrix ``M``, a continuation guard against the previous point's orbit, and a basin
 check in the orbit's Lyapunov metric ``V(d) = d^T P d``, ``P - M^T P M = I``
-(:func:`_lyapunov_form`), along the first periods of the transient.
+(:func:`_lyapunov_form`), along the first periods of the transient. Each Newton iterate is
+verified by the recorded plain period from it (:func:`~models.dynamics.sdof_kernels.record_kernel`,
+whose end state is the Poincare map), conditions 2-4 then judged with the monodromy of the
+previous iterate (:func:`_shoot`, ``verify_record``; 3 period-equivalents per accepted point
+instead of 5); continuation nodes may be skipped far from folds (:func:`_walker_path`,
+``record``, :func:`_far_from_fold` and a bound on the orbit's predicted move). The measured
+effect of both is in :mod:`models.dynamics.walkers` ("Methods").
 
 The kernels here call the compiled RK4 step, period, recorder and settling of
 :mod:`models.dynamics.sdof_kernels`, which numba inlines into this file's cached kernels; the
@@ -234,9 +240,63 @@ def _lyapunov_value(p11, p12, p22, dx, dv):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def _accept(
+    x, v, xs, vs, x1, v1, m11, m12, m21, m22, zeta, force, b, kd, ed, kb, eb, h, tol, scale,
+    guard_x, guard_v, basin_periods, basin_repeats,
+):  # pragma: no cover - compiled
+    """Conditions 2-4 of :func:`_shoot` for the fixed point ``y* = (xs, vs)`` (1 holds).
+
+    ``(x, v)`` is the entry state ``y0``, ``(x1, v1) = P(y0)``, ``M`` the monodromy matrix the
+    conditions are judged with. Returns ``(ok, x, v, periods)``: ``(x, v)`` the state the
+    settling fallback continues from when rejected (the entry state, or the transient's state
+    after the periods followed).
+    """
+    det = m11 * m22 - m12 * m21
+    tr = m11 + m22
+    if not (abs(det) < 1.0 and abs(tr) < 1.0 + det):
+        return False, x, v, 0
+    d0x = x - xs
+    d0v = v - vs
+    if not (abs(d0x) <= guard_x and abs(d0v) <= guard_v):
+        return False, x, v, 0
+    if max(abs(d0x), abs(d0v)) <= 10.0 * tol * scale:
+        return True, xs, vs, 0
+    p11, p12, p22 = _lyapunov_form(m11, m12, m21, m22)
+    if not math.isfinite(p11):
+        return False, x, v, 0
+    q0 = _lyapunov_value(p11, p12, p22, d0x, d0v)
+    q1 = _lyapunov_value(p11, p12, p22, x1 - xs, v1 - vs)
+    near = (abs(d0x) <= _BASIN_NEAR * guard_x and abs(d0v) <= _BASIN_NEAR * guard_v)
+    if (q1 <= q0 - _BASIN_DECREASE * (d0x * d0x + d0v * d0v)
+            and (near or q1 <= _BASIN_CONTRACTION * q0)):
+        return True, xs, vs, 0
+    # follow the physical transient from P(y0), one plain period at a time
+    cost = 0
+    xa = x1
+    va = v1
+    good = 0
+    for _ in range(basin_periods):
+        dx = xa - xs
+        dv = va - vs
+        qa = _lyapunov_value(p11, p12, p22, dx, dv)
+        xa, va = rk4_period(xa, va, zeta, force, b, kd, ed, kb, eb, h)
+        cost += 1
+        if not (math.isfinite(xa) and math.isfinite(va)):
+            return False, x, v, cost
+        qb = _lyapunov_value(p11, p12, p22, xa - xs, va - vs)
+        if qb <= qa - _BASIN_DECREASE * (dx * dx + dv * dv):
+            good += 1
+            if good >= basin_repeats and qb <= _BASIN_CONTRACTION * q0:
+                return True, xs, vs, cost
+        else:
+            good = 0
+    return False, xa, va, cost
+
+
+@njit(cache=True)
 def _shoot(
     x, v, zeta, force, b, kd, ed, kb, eb, h, tol, max_newton, guard_x, guard_v, basin_periods,
-    basin_repeats,
+    basin_repeats, verify_record, npair, cs, sn, ring, amps,
 ):  # pragma: no cover - compiled
     """Newton on the period-1 Poincare map from the entry state ``y0 = (x, v)``.
 
@@ -250,15 +310,30 @@ def _shoot(
     for ``basin_repeats`` consecutive periods of the physical transient followed for at most
     ``basin_periods`` plain periods. Entry states within ``10 tol`` of ``y*`` pass (4) at once.
 
-    Returns ``(ok, x, v, periods)``: ``(x, v)`` is ``y*`` when accepted, else the state the
-    settling fallback continues from (the entry state, or the transient's state after the
-    periods followed); periods counted as plain-period equivalents (a variational period as 2).
+    Without ``verify_record`` every iterate ``y_k`` gets a variational period (``P(y_k)`` and
+    ``M(y_k)``), and (1)-(4) are judged at the first iterate whose residual is below ``tol``
+    with its own ``M``; the caller then records a period from ``y*``. With ``verify_record``
+    (the default of :mod:`models.dynamics.walkers`) each Newton iterate ``y_(k+1)`` is checked
+    by the *recorded* plain period from it (:func:`~models.dynamics.sdof_kernels.record_kernel`
+    into ``amps``: its end state is ``P(y_(k+1))``), and (2)-(4) are judged with
+    ``M(y_k)``, the monodromy of the last Newton iterate (off by ``O(|y_(k+1) - y_k|)``); a
+    residual above ``tol`` continues Newton from ``y_(k+1)``. An accepted point then costs
+    one variational and one plain period (3 equivalents) instead of two and one (5).
+
+    Returns ``(status, x, v, periods, loss, impact, x range, v range, trace, det)``: status 0
+    rejected (``(x, v)`` the state the settling fallback continues from: the entry state, or
+    the transient's after the periods followed), 1 accepted with ``(x, v) = y*`` (not
+    recorded), 2 accepted and recorded (``(x, v)`` the recorded period's end state, ``amps``
+    filled, flags and ranges returned); periods counted as plain-period equivalents (a
+    variational period as 2); ``trace`` and ``det`` those of the ``M`` the point was judged
+    with (NaN unless accepted).
     """
     xs = x
     vs = v
     cost = 0
     x1 = math.nan
     v1 = math.nan
+    nan = math.nan
     for it in range(max_newton):
         xp, vp, m11, m12, m21, m22 = _period_monodromy(xs, vs, zeta, force, b, kd, ed, kb, eb, h)
         cost += 2
@@ -269,45 +344,13 @@ def _shoot(
         r1 = vp - vs
         scale = max(1.0, abs(xs), abs(vs))
         if max(abs(r0), abs(r1)) < tol * scale:
-            det = m11 * m22 - m12 * m21
-            tr = m11 + m22
-            if not (abs(det) < 1.0 and abs(tr) < 1.0 + det):
-                return False, x, v, cost
-            d0x = x - xs
-            d0v = v - vs
-            if not (abs(d0x) <= guard_x and abs(d0v) <= guard_v):
-                return False, x, v, cost
-            if max(abs(d0x), abs(d0v)) <= 10.0 * tol * scale:
-                return True, xs, vs, cost
-            p11, p12, p22 = _lyapunov_form(m11, m12, m21, m22)
-            if not math.isfinite(p11):
-                return False, x, v, cost
-            q0 = _lyapunov_value(p11, p12, p22, d0x, d0v)
-            q1 = _lyapunov_value(p11, p12, p22, x1 - xs, v1 - vs)
-            near = (abs(d0x) <= _BASIN_NEAR * guard_x and abs(d0v) <= _BASIN_NEAR * guard_v)
-            if (q1 <= q0 - _BASIN_DECREASE * (d0x * d0x + d0v * d0v)
-                    and (near or q1 <= _BASIN_CONTRACTION * q0)):
-                return True, xs, vs, cost
-            # follow the physical transient from P(y0), one plain period at a time
-            xa = x1
-            va = v1
-            good = 0
-            for _ in range(basin_periods):
-                dx = xa - xs
-                dv = va - vs
-                qa = _lyapunov_value(p11, p12, p22, dx, dv)
-                xa, va = rk4_period(xa, va, zeta, force, b, kd, ed, kb, eb, h)
-                cost += 1
-                if not (math.isfinite(xa) and math.isfinite(va)):
-                    return False, x, v, cost
-                qb = _lyapunov_value(p11, p12, p22, xa - xs, va - vs)
-                if qb <= qa - _BASIN_DECREASE * (dx * dx + dv * dv):
-                    good += 1
-                    if good >= basin_repeats and qb <= _BASIN_CONTRACTION * q0:
-                        return True, xs, vs, cost
-                else:
-                    good = 0
-            return False, xa, va, cost
+            ok, xf, vf, c = _accept(
+                x, v, xs, vs, x1, v1, m11, m12, m21, m22, zeta, force, b, kd, ed, kb, eb, h,
+                tol, scale, guard_x, guard_v, basin_periods, basin_repeats,
+            )
+            if ok:
+                return 1, xf, vf, cost + c, False, False, nan, nan, m11 + m22, m11 * m22 - m12 * m21
+            return 0, xf, vf, cost + c, False, False, nan, nan, nan, nan
         a11 = m11 - 1.0
         a22 = m22 - 1.0
         d = a11 * a22 - m12 * m21
@@ -317,14 +360,49 @@ def _shoot(
         vs += (-a11 * r1 + m21 * r0) / d
         if not (math.isfinite(xs) and math.isfinite(vs)):
             break
-    return False, x, v, cost
+        if verify_record:
+            xe, ve, _mu, lo, im, _pa, rx, rv = record_kernel(
+                xs, vs, zeta, force, b, kd, ed, kb, eb, ed[:, 0], eb[:, 0], npair, cs, sn, h, 1,
+                ring, 0, amps,
+            )
+            cost += 1
+            scale = max(1.0, abs(xs), abs(vs))
+            if max(abs(xe - xs), abs(ve - vs)) < tol * scale:
+                ok, xf, vf, c = _accept(
+                    x, v, xs, vs, x1, v1, m11, m12, m21, m22, zeta, force, b, kd, ed, kb, eb,
+                    h, tol, scale, guard_x, guard_v, basin_periods, basin_repeats,
+                )
+                if ok:
+                    return 2, xe, ve, cost + c, lo, im, rx, rv, m11 + m22, m11 * m22 - m12 * m21
+                return 0, xf, vf, cost + c, False, False, nan, nan, nan, nan
+    return 0, x, v, cost, False, False, nan, nan, nan, nan
+
+
+@njit(cache=True)
+def _far_from_fold(tr, det, margin):  # pragma: no cover - compiled
+    """Whether the multipliers of ``M`` (trace ``tr``, determinant ``det``) are clear of +-1.
+
+    Clear of 1 and -1 (a fold or a flip): ``|det(M -+ I)| >= margin (1 - sqrt(det M))^2``.
+
+    ``det(M - I) = (1 - mu_1)(1 - mu_2) = 1 - tr + det`` (``1 + tr + det`` for -1). For a
+    complex pair ``r e^(+-i theta)`` it is ``(1 - r)^2 + 2 r (1 -+ cos theta)``: with
+    ``r = sqrt(det)`` the orbit's contraction per period, the ratio to ``(1 - r)^2`` is 1 when
+    the pair meets on the real axis and grows with the angle from it; a real pair splitting
+    towards 1 (a fold) or -1 (a flip) drives it to 0. Since ``theta`` is the phase the free
+    oscillation turns per mesh period, small ratios flag the resonances, where the folds are.
+    """
+    if not (math.isfinite(tr) and math.isfinite(det)) or det <= 0.0:
+        return False
+    c = 1.0 - math.sqrt(det)
+    return min(1.0 - tr + det, 1.0 + tr + det) >= margin * c * c
 
 
 @njit(cache=True)
 def _walker_path(
     x, v, zeta, force, b, kd, ed, kb, eb, npair, cs, sn, lam, tol, shoot, max_newton,
-    min_periods, max_periods, guard, guard_floor, basin_periods, basin_repeats, ring, poinc,
-    amps, loss, impact, converged, newton, periods_run,
+    min_periods, max_periods, guard, guard_floor, basin_periods, basin_repeats, verify_record,
+    record, skip_step, skip_move, fold_margin, ring, poinc, amps, loss, impact, converged,
+    newton, periods_run, solved,
 ):  # pragma: no cover - compiled
     """One walker's sweep along ``lam`` (time order), carrying the state; fills its rows.
 
@@ -332,23 +410,61 @@ def _walker_path(
     previous point (Newton-accepted, or settled with period 1), whose ranges size the
     continuation guard (``guard`` times the range plus ``guard_floor``); the first point and
     the point after a period-n, aperiodic or unsettled response are settled.
+
+    A node with ``record[i]`` False (a continuation node) is skipped when the last solved node
+    was a Newton orbit far from a fold (:func:`_far_from_fold` with ``fold_margin``) and the
+    next node lies within ``skip_step`` of it in ``ln lam`` (``skip_step <= 0``: never): no
+    solve, the state is carried unchanged, its outputs are the last solved node's with
+    ``periods_run`` 0 and ``solved`` False. The last node is never skipped.
     """
     n = kd.shape[0] // 2
     rx = -1.0  # orbit ranges of the previous point; < 0: no period-1 predictor
     rv = -1.0
+    far = False  # the last solved node is a Newton orbit far from a fold
+    rate = 0.0  # its orbit's move from the entry state per unit ln lam, in guards
+    last = -1  # index of the last solved node
     for i in range(lam.size):
+        step = abs(math.log(lam[i + 1] / lam[last])) if far and i + 1 < lam.size else math.inf
+        if not record[i] and step <= skip_step and rate * step <= skip_move:
+            for k in range(amps.shape[1]):
+                amps[i, k] = amps[last, k]
+            loss[i] = loss[last]
+            impact[i] = impact[last]
+            converged[i] = converged[last]
+            newton[i] = False
+            periods_run[i] = 0
+            solved[i] = False
+            continue
+        solved[i] = True
+        step = abs(math.log(lam[i] / lam[last])) if last >= 0 else 0.0
+        last = i
+        far = False
         h = 2.0 * math.pi / (lam[i] * n)
-        ok = False
+        status = 0
         cost = 0
         xs = x
         vs = v
         if shoot and rx >= 0.0:
-            ok, xs, vs, cost = _shoot(
+            status, xs, vs, cost, lo, im, rx2, rv2, tr, det = _shoot(
                 x, v, zeta, force, b, kd, ed, kb, eb, h, tol, max_newton,
                 guard * rx + guard_floor, guard * rv + guard_floor, basin_periods,
-                basin_repeats,
+                basin_repeats, verify_record, npair, cs, sn, ring, amps[i],
             )
-        if ok:
+            if status > 0 and skip_step > 0.0:
+                far = _far_from_fold(tr, det, fold_margin) and step > 0.0
+                rate = max(abs(x - xs) / (guard * rx + guard_floor),
+                           abs(v - vs) / (guard * rv + guard_floor)) / max(step, 1e-300)
+        if status == 2:
+            x = xs
+            v = vs
+            rx = rx2
+            rv = rv2
+            loss[i] = lo
+            impact[i] = im
+            converged[i] = True
+            newton[i] = True
+            periods_run[i] = cost
+        elif status == 1:
             x, v, _mu, lo, im, _pa, rx, rv = record_kernel(
                 xs, vs, zeta, force, b, kd, ed, kb, eb, ed[:, 0], eb[:, 0], npair, cs, sn, h, 1,
                 ring, 0, amps[i],
@@ -379,16 +495,18 @@ def _walker_path(
 @njit(parallel=True, cache=True)
 def walker_sweep_kernel(
     log_nodes, kbank, ebank, bbank, log_s, eps, zeta, force, b, lam, cs, sn, tol, shoot,
-    max_newton, min_periods, max_periods, guard, guard_floor, basin_periods, basin_repeats, amps,
-    loss, impact, converged, newton, periods_run,
+    max_newton, min_periods, max_periods, guard, guard_floor, basin_periods, basin_repeats,
+    verify_record, record, skip_step, skip_move, fold_margin, amps, loss, impact, converged,
+    newton, periods_run, solved,
 ):  # pragma: no cover - compiled
     """Every walker's sweep in one call, ``numba.prange`` over walkers.
 
     Per walker ``w``: tables interpolated from the bank at ``log_s[w]`` with the alternating
     parts scaled by ``eps[w]`` (:func:`_walker_tables`), start at the static state
     ``x = b + F + mean(e)``, ``x' = 0``, then the points of ``lam[w]`` (``(W, M)``, time order)
-    each by Newton shooting (``shoot``) with the settling fallback, or by settling alone.
-    Outputs ``(W, M[, 3])``.
+    each by Newton shooting (``shoot``) with the settling fallback, or by settling alone;
+    ``verify_record``, ``record`` (``(M,)`` bool), ``skip_step`` and ``fold_margin`` as in
+    :func:`_shoot` and :func:`_walker_path`. Outputs ``(W, M[, 3])``.
     """
     n2 = kbank.shape[1]
     for w in prange(lam.shape[0]):
@@ -403,8 +521,9 @@ def walker_sweep_kernel(
         _walker_path(
             b[w] + force[w] + em, 0.0, zeta[w], force[w], b[w], kd, ed, kb, eb, npair, cs, sn,
             lam[w], tol, shoot, max_newton, min_periods, max_periods, guard, guard_floor,
-            basin_periods, basin_repeats, ring, poinc, amps[w], loss[w], impact[w], converged[w],
-            newton[w], periods_run[w],
+            basin_periods, basin_repeats, verify_record, record, skip_step, skip_move,
+            fold_margin, ring, poinc, amps[w], loss[w], impact[w], converged[w], newton[w],
+            periods_run[w], solved[w],
         )
 
 

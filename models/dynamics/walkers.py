@@ -60,6 +60,45 @@ the very RK4 step of the settling kernel), accepted only when all four hold:
    boundary could show it for a period or two on its way to the other attractor; in the
    reduced SBC's 16-point sweeps two of six true curves had a point on the wrong branch.)
 
+Each Newton iterate ``y_(k+1)`` is verified with the *recorded* plain period from it (its end
+state is ``P(y_(k+1))``; ``verify_record=True``, the default): when its residual is below
+``tol``, conditions 2-4 are judged with ``M(y_k)``, the monodromy matrix of the last Newton
+iterate, instead of ``M(y_(k+1))`` (an approximation of order ``|y_(k+1) - y_k|``), and the
+recorded period is the point's output; otherwise Newton continues from ``y_(k+1)``. An
+accepted point costs one variational and one plain period (3 period-equivalents) instead of
+two and one (5) with ``verify_record=False``. Measured (issue 20, helper speed7; 32 walkers
+near the demo's posterior and 32 broad, zeta 0.01-0.06, s 0.7-1.2, on the demo's run-up,
+893 nodes, and on the SBC-like paths at 100, 200 and 300 N m, 626 nodes; FVMS, VVMS,
+LSTE): no jump window changed in 1536 walker-directions, ``|Delta log mu|`` at window points
+off jumps 0 at the median and p99, at most 5e-6 (FVMS; 3e-14 for VVMS and LSTE): the
+accepted iterates are the same, only conditions 2-4 could decide otherwise, and did not.
+Cost: 1.4-1.5 times fewer period-equivalents per window point for VVMS and LSTE, 1.2-1.35
+for FVMS (whose settled points dominate).
+
+**Skipped continuation nodes.** With ``record`` (False at the run-up's continuation nodes,
+whose outputs are unused), a continuation node is skipped (no solve: the state is carried
+unchanged, the outputs are the last solved node's, ``periods_run`` 0, ``solved`` False) when
+
+* the last solved node was a Newton orbit (never after a settled node: no multipliers) whose
+  multipliers are clear of 1 and -1: ``|det(M -+ I)| >= WALKER_FOLD_MARGIN (1 - sqrt(det
+  M))^2`` with the margin 1, i.e. not a real pair splitting towards a fold or a flip;
+* the step in ``ln f_m`` from it to the next node is at most ``WALKER_SKIP_STEP`` = 3 %, and
+* the orbit's predicted move over that step, its move from the entry state at the last
+  solved node per unit ``ln f_m`` times the step, is at most ``WALKER_SKIP_MOVE`` = 2.5 % of
+  the continuation guard (half the basin check's linear neighbourhood): a step-size control
+  that stops skipping where the branch turns fast, near its fold.
+
+Window nodes (``record`` True) and the last node are always solved. The multipliers alone
+did not foresee the folds of these non-smooth models (the pair stays complex up to a node or
+two before them): with a 3 % step and no move bound, 17 of 64 walker-directions near the
+demo's posterior changed jump window whatever the margin (0.5-30 on that ratio, or its real
+pair form); with the move bound at 5 % of the guard, 20 of 64 at 200 N m (VVMS); at 3 %, 5
+of 1100. At 2.5 % (the default): 2 of 1536 walker-directions changed jump window (0.13 %,
+LSTE at 100 N m), ``|Delta log mu|`` off jumps p50 1e-14, p99 1e-13, at most 5e-5; cost
+1.6-2.05 times fewer period-equivalents per window point than ``verify_record=False`` with
+every node solved for VVMS and LSTE (1.3-1.95 for FVMS); see the module's tests and
+``tests/benchmarks/bench_runup_sweep.py``.
+
 Otherwise (a jump, a period-n, aperiodic or unstable response, or a transient that does not
 reach the orbit's neighbourhood) the point is settled by time integration, continuing the
 transient from where the basin check left it, with the project's settling kernel
@@ -72,8 +111,10 @@ checked on its cubic Hermite interpolant). ``method="integrate"`` settles every 
 :func:`sweep_walkers_reference`, the plain per-walker loop of
 :func:`~models.dynamics.sweep.sweep` on the exact cycle at ``T / s``, 128 steps, tol 1e-6):
 
-* a point is either a period-1 orbit that passed 1-4, or the settle kernel's result from the
-  entry state (the same algorithm as the plain sweep); ``converged`` is False where neither
+* a point is either a period-1 orbit that passed 1-4 (2-4 judged with the monodromy of the
+  last Newton iterate under ``verify_record``), or the settle kernel's result from the entry
+  state (the same algorithm as the plain sweep), or a skipped continuation node (``solved``
+  False, outputs not to be used); ``converged`` is False where neither
   gave a periodic response within ``max_periods`` (its amplitudes are then those of the last
   period run and must not be trusted);
 * away from jumps the amplitudes differ from the reference by the discretisation (64 against
@@ -90,7 +131,9 @@ checked on its cubic Hermite interpolant). ``method="integrate"`` settles every 
   shooting put whole branch stretches on another attractor (Newton from the static state
   found the small orbit where the transient reaches the large one);
 * cost: 10-14 period-equivalents per point for FVMS (7-8 for VVMS and LSTE) against ~70
-  (at twice the steps) for the reference, but a walker whose response is aperiodic pays up
+  (at twice the steps) for the reference, as measured with ``verify_record=False`` (the
+  record verification removes about 2 per Newton point, skipping continuation nodes more;
+  "Methods"), but a walker whose response is aperiodic pays up
   to ``max_periods`` at each such point, like the reference;
 * points where neither Newton nor settling finds a periodic response have ``converged``
   False; a response that grows without bound (a parametric instability of the linear model at
@@ -150,6 +193,15 @@ WALKER_GUARD_FLOOR: Final = 1e-3
 #: ``_BASIN_CONTRACTION``).
 WALKER_BASIN_PERIODS: Final = 12
 WALKER_BASIN_REPEATS: Final = 2
+#: Continuation nodes (``record`` False) are skipped while the step in ``ln f_m`` from the last
+#: solved node to the next node stays within ``WALKER_SKIP_STEP`` ...
+WALKER_SKIP_STEP: Final = 0.03
+#: ... and that node was a Newton orbit whose multipliers keep ``1 - max |mu| >=
+#: WALKER_FOLD_MARGIN (1 - sqrt(det M))`` (far from a fold or flip; module notes).
+WALKER_FOLD_MARGIN: Final = 1.0
+#: ... and the orbit's predicted move over that step (its move from the entry state at the last
+#: solved node per unit ``ln f_m``, times the step) stays within this fraction of the guard.
+WALKER_SKIP_MOVE: Final = 0.025
 
 
 @dataclass(frozen=True, eq=False)
@@ -360,11 +412,16 @@ class WalkerSweep:
     converged : numpy.ndarray
         ``(W, N)`` bool: a periodic response was found (Newton or settled with period > 0).
     newton_fraction : float
-        Fraction of points accepted from Newton shooting (0 for ``"integrate"`` and the
-        reference).
+        Fraction of the solved points accepted from Newton shooting (0 for ``"integrate"``
+        and the reference).
     periods_run : numpy.ndarray
         ``(W, N)`` int: mesh-period equivalents spent per point (a variational period
         counts 2).
+    solved : numpy.ndarray
+        ``(W, N)`` bool: the point was solved; False at a skipped continuation node (its
+        outputs are the last solved point's, ``periods_run`` 0).
+    newton : numpy.ndarray
+        ``(W, N)`` bool: the point was accepted from Newton shooting.
     """
 
     amplitude_m: np.ndarray
@@ -373,6 +430,8 @@ class WalkerSweep:
     converged: np.ndarray
     newton_fraction: float
     periods_run: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=np.int64))
+    solved: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=np.bool_))
+    newton: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=np.bool_))
 
 
 def _zero_sweep(shape: tuple[int, ...]) -> WalkerSweep:
@@ -384,6 +443,8 @@ def _zero_sweep(shape: tuple[int, ...]) -> WalkerSweep:
         converged=np.zeros(shape, dtype=np.bool_),
         newton_fraction=0.0,
         periods_run=np.zeros(shape, dtype=np.int64),
+        solved=np.ones(shape, dtype=np.bool_),
+        newton=np.zeros(shape, dtype=np.bool_),
     )
 
 
@@ -421,6 +482,8 @@ def sweep_walkers(
     tol: float = 1e-6,
     min_periods: int = 4,
     max_periods: int = 1000,
+    record: ArrayLike | None = None,
+    verify_record: bool = True,
 ) -> WalkerSweep:
     """Sweep every walker along the time-ordered path ``mesh_frequency_Hz`` (one compiled call).
 
@@ -443,6 +506,13 @@ def sweep_walkers(
         Newton residual and settling tolerance (units of ``L``).
     min_periods, max_periods : int
         Bounds of the settling fallback (mesh periods).
+    record : array_like of bool, optional
+        ``(N,)``: False marks a continuation node, whose outputs are not used; such a node
+        may be skipped far from folds (module notes, "Skipped continuation nodes"). None:
+        every node is solved.
+    verify_record : bool
+        Check each Newton iterate with the recorded period (module notes, "Methods"); False:
+        with a second variational period, as before issue 20's item 4.
 
     Returns
     -------
@@ -462,9 +532,18 @@ def sweep_walkers(
     shoot = method in ("shooting", "auto")
     _, z, s, e, b, lam = _walker_inputs(bank, mesh_frequency_Hz, zeta, stiffness_scale,
                                         fluctuation_scale, backlash_m)
+    if record is None:
+        keep = np.ones(lam.shape[1], dtype=np.bool_)
+        skip_step = 0.0
+    else:
+        keep = np.ascontiguousarray(record, dtype=np.bool_)
+        if keep.shape != (lam.shape[1],):
+            raise ValueError(f"`record` must have the path's shape ({lam.shape[1]},), was "
+                             f"{keep.shape}")
+        skip_step = float(WALKER_SKIP_STEP)
     kbank, ebank, bbank, cs, sn = bank.tables(steps_per_period)
     out = _zero_sweep(lam.shape)
-    newton = np.zeros(lam.shape, dtype=np.bool_)
+    newton = out.newton
     L = bank.length_scale_m
     force = np.ascontiguousarray(bank.load_N / (s * bank.reference_stiffness_N_m * L))
     walker_sweep_kernel(
@@ -472,10 +551,12 @@ def sweep_walkers(
         np.ascontiguousarray(np.log(s)), e, z, force, np.ascontiguousarray(0.5 * b / L), lam,
         cs, sn, float(tol), bool(shoot), WALKER_NEWTON, int(min_periods), int(max_periods),
         WALKER_GUARD, WALKER_GUARD_FLOOR, WALKER_BASIN_PERIODS, WALKER_BASIN_REPEATS,
+        bool(verify_record), keep, skip_step, float(WALKER_SKIP_MOVE), float(WALKER_FOLD_MARGIN),
         out.amplitude_m, out.contact_loss, out.backside_impact, out.converged, newton,
-        out.periods_run,
+        out.periods_run, out.solved,
     )
-    return replace(out, amplitude_m=out.amplitude_m * L, newton_fraction=float(newton.mean()))
+    frac = float(newton[out.solved].mean()) if out.solved.any() else 0.0
+    return replace(out, amplitude_m=out.amplitude_m * L, newton_fraction=frac)
 
 
 def sweep_walkers_reference(

@@ -290,7 +290,8 @@ class RunUpForward:
         for path, bank in zip(self.paths, self.banks, strict=True):
             sw = sweep_walkers(bank, path.mesh_frequency_Hz, zeta=z, stiffness_scale=s,
                                fluctuation_scale=e, backlash_m=b,
-                               steps_per_period=self.steps_per_period)
+                               steps_per_period=self.steps_per_period,
+                               record=path.weights > 0)
             with np.errstate(invalid="ignore", over="ignore"):
                 a = path.power_mean(acceleration_arms(sw.amplitude_m, path.mesh_frequency_Hz))
             with np.errstate(divide="ignore", invalid="ignore"):

@@ -15,6 +15,12 @@ Per model, measured in the same run:
    with shooting (what ``method="auto"`` does for every model) and, for FVMS, also pure
    integration; best of ``--repeat`` after a warm-up.
 
+3. **dense path** (issue 20, item 4): the same points with continuation nodes inserted so
+   that no step exceeds 0.3 % in ``ln f_m`` (as the run-up calibration sweeps them), swept by
+   the *old* method (``verify_record=False``, every node solved) and the *new* one (the
+   default record verification, continuation nodes skippable: ``record`` True at the points
+   only), and by the plain loop; compared at the points.
+
 Printed: times, speed-up (plain / kernel), Newton fraction, period equivalents per point, and
 the error of the kernel against the full sweep (:func:`~models.dynamics.walkers.sweep_agreement`,
 acceleration-weighted amplitude): p99 and worst off jumps, points above 10 % near and away
@@ -29,6 +35,7 @@ tests/benchmarks/bench_runup_sweep.py -m benchmark -s``. Timings depend on the m
 from __future__ import annotations
 
 import argparse
+import itertools
 import sys
 import time
 from typing import Any
@@ -38,6 +45,8 @@ import numpy as np
 import pytest
 
 from models.dynamics.walkers import (
+    CycleBank,
+    WalkerSweep,
     cycle_bank,
     sweep_agreement,
     sweep_walkers,
@@ -94,7 +103,61 @@ def run(walkers: int = 32, points: int = 100, kinds: tuple[str, ...] = ("fvms", 
             out[f"{kind}/{method}"] = dict(t_plain=t_plain, t_kernel=best,
                                            speedup=t_plain / best, agreement=a,
                                            newton=res.newton_fraction)
+        dense_path(bank, path, kw, repeat, out, kind)
     return out
+
+
+def _dense(path: np.ndarray, max_step: float = 0.003) -> tuple[np.ndarray, np.ndarray]:
+    """``path`` with continuation nodes at most ``max_step`` apart in ``ln f``; ``record``."""
+    nodes, record = [path[:1]], [np.ones(1, dtype=bool)]
+    for a, b in itertools.pairwise(path):
+        k = max(int(np.ceil(abs(np.log(b / a)) / max_step)), 1)
+        nodes.append(a * (b / a) ** (np.arange(1, k + 1) / k))
+        rec = np.zeros(k, dtype=bool)
+        rec[-1] = True
+        record.append(rec)
+    return np.concatenate(nodes), np.concatenate(record)
+
+
+def _at(sw: WalkerSweep, keep: np.ndarray) -> WalkerSweep:
+    return WalkerSweep(sw.amplitude_m[:, keep], sw.contact_loss[:, keep],
+                       sw.backside_impact[:, keep], sw.converged[:, keep], sw.newton_fraction,
+                       sw.periods_run[:, keep])
+
+
+def dense_path(bank: CycleBank, path: np.ndarray, kw: dict[str, Any], repeat: int,
+               out: dict[str, dict[str, object]], kind: str) -> None:
+    """Item 3 of the module notes: old and new method on the dense path, and the plain loop."""
+    f, record = _dense(path)
+    t0 = time.perf_counter()
+    ref = _at(sweep_walkers_reference(bank, f, **kw), record)
+    t_plain = time.perf_counter() - t0
+    runs = {}
+    for name, opts in (("old", dict(verify_record=False)), ("new", dict(record=record))):
+        best = np.inf
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            res = sweep_walkers(bank, f, **kw, **opts)  # type: ignore[arg-type]
+            best = min(best, time.perf_counter() - t0)
+        runs[name] = (res, best)
+    (old, t_old), (new, t_new) = runs["old"], runs["new"]
+    c_old = old.periods_run.sum() / record.sum() / old.periods_run.shape[0]
+    c_new = new.periods_run.sum() / record.sum() / new.periods_run.shape[0]
+    vs_old = sweep_agreement(_at(new, record), _at(old, record))
+    print(f"  dense path ({f.size} nodes, {record.sum()} points): old {1e3 * t_old:.0f} ms, "
+          f"{c_old:.1f} period-equivalents per point; new {1e3 * t_new:.0f} ms, {c_new:.1f} "
+          f"per point ({100 * new.solved.mean():.0f} % of the nodes solved): "
+          f"{c_old / c_new:.2f}x fewer periods, {t_old / t_new:.2f}x faster; plain loop "
+          f"{t_plain:.1f} s = {t_plain / t_new:.0f}x the new\n"
+          f"    new vs old at the points: p99 {vs_old.p99_off_jump:.2g}, worst "
+          f"{vs_old.worst_off_jump:.2g} off jumps; unmatched jumps {vs_old.unmatched_jumps}")
+    for name, res in (("old", old), ("new", new)):
+        a = sweep_agreement(_at(res, record), ref)
+        print(f"    {name} vs full sweep: p99 off jumps {100 * a.p99_off_jump:.3g} %, worst "
+              f"{100 * a.worst_off_jump:.3g} %; off-jump > 0.5 %: {a.off_jump_over}; "
+              f"unmatched jumps: {a.unmatched_jumps}")
+    out[f"{kind}/dense"] = dict(t_old=t_old, t_new=t_new, periods_old=c_old,
+                                periods_new=c_new, agreement_old=vs_old)
 
 
 @pytest.mark.benchmark

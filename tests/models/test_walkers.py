@@ -233,3 +233,103 @@ def test_error_contract_refusals_and_flags(banks):
                       backlash_m=100e-6, method="integrate", max_periods=4)
     assert not r.converged.all()
     assert r.newton_fraction == 0.0
+
+
+def _dense(bank: CycleBank, scale: float, step: float = 0.003,
+           span: tuple[float, float] = (0.75, 1.3), every: int = 6
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """A dense run-up and run-down through the resonance: ``(path, record)``.
+
+    Log-spaced nodes ``step`` apart in ``ln f_m`` (the run-up calibration's continuation step)
+    over ``span`` times the walker's natural frequency; every ``every``-th node is a "window"
+    node (``record`` True), the others continuation nodes.
+    """
+    fn = float(bank.natural_frequency_Hz(scale))
+    m = math.ceil(math.log(span[1] / span[0]) / step)
+    up = fn * span[0] * np.exp(step * np.arange(m + 1))
+    path = np.concatenate([up, up[::-1]])
+    record = np.zeros(path.size, dtype=bool)
+    record[::every] = True
+    record[-1] = True
+    return path, record
+
+
+def _log_weighted(sw: WalkerSweep) -> np.ndarray:
+    return np.log(np.sqrt(np.sum((np.arange(1, 4) ** 2 * sw.amplitude_m) ** 2, axis=-1)))
+
+
+def _jumps(log_a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per walker, the node index of the largest step up the path and down it."""
+    half = log_a.shape[1] // 2
+    d = np.abs(np.diff(log_a, axis=1))
+    return np.argmax(d[:, :half - 1], axis=1), half + np.argmax(d[:, half:], axis=1)
+
+
+WALKERS = dict(zeta=np.array([0.02, 0.025, 0.03, 0.04]),
+               stiffness_scale=np.array([0.9, 0.95, 1.0, 1.1]),
+               fluctuation_scale=np.ones(4), backlash_m=np.full(4, 136e-6))
+
+
+@pytest.mark.parametrize("kind", ["vvms", "lste"])
+def test_record_verification_matches_the_variational_one(banks, kind):
+    """Newton iterates verified by the recorded period match a second variational period.
+
+    The default against ``verify_record=False``, every node solved, on a dense path with a
+    fold: same jump nodes, amplitudes within the module notes' bound (1e-4 in log; the
+    accepted orbits are the same iterates, so they agree to round-off), at about 3 instead
+    of 5 period-equivalents per Newton point.
+    """
+    bank = banks[kind]
+    path, _ = _dense(bank, 1.0)
+    old = sweep_walkers(bank, path, **WALKERS, verify_record=False)
+    new = sweep_walkers(bank, path, **WALKERS)
+    la, lb = _log_weighted(old), _log_weighted(new)
+    assert np.max(np.abs(np.diff(la, axis=1))) > 0.3  # the path crosses a fold
+    for a, b in zip(_jumps(la), _jumps(lb), strict=True):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_allclose(lb, la, atol=1e-4)
+    assert new.solved.all() and old.solved.all()
+    both = old.newton & new.newton
+    assert both.mean() > 0.8
+    assert new.periods_run[both].mean() < 0.75 * old.periods_run[both].mean()
+
+
+@pytest.mark.parametrize("kind", ["vvms", "lste"])
+def test_skipped_continuation_nodes_keep_the_window_nodes(banks, kind):
+    """Skipping continuation nodes far from folds keeps the window nodes' results.
+
+    Window nodes are always solved, no node is skipped right after a settled (non-Newton)
+    node, the jumps stay at the same window nodes and the window nodes' amplitudes agree with
+    every node solved within 1e-4 in log away from the jumps; fewer periods in all.
+    """
+    bank = banks[kind]
+    path, record = _dense(bank, 1.0)
+    dense = sweep_walkers(bank, path, **WALKERS)
+    skip = sweep_walkers(bank, path, **WALKERS, record=record)
+    assert skip.solved[:, record].all()
+    assert not skip.solved.all()  # something was skipped
+    assert (skip.periods_run[~skip.solved] == 0).all()
+    assert skip.solved[:, 0].all() and skip.solved[:, 1].all()  # the first node is settled
+    for w in range(skip.solved.shape[0]):
+        solved = np.flatnonzero(skip.solved[w])
+        for i in np.flatnonzero(~skip.solved[w]):
+            last = solved[solved < i][-1]
+            assert skip.newton[w, last], (w, i)
+    la, lb = _log_weighted(dense)[:, record], _log_weighted(skip)[:, record]
+    for a, b in zip(_jumps(la), _jumps(lb), strict=True):
+        np.testing.assert_array_equal(a, b)
+    near = np.zeros(la.shape, dtype=bool)
+    for w, i in zip(*np.nonzero(np.abs(np.diff(la, axis=1)) > 0.3), strict=True):
+        near[w, max(0, i - 1): i + 3] = True
+    assert np.max(np.abs(la - lb)[~near]) < 1e-4
+    assert skip.periods_run.sum() < dense.periods_run.sum()
+
+
+def test_no_skipping_without_newton(banks):
+    """``method="integrate"`` settles every node: nothing is skipped whatever the mask."""
+    bank = banks["vvms"]
+    path, record = _dense(bank, 1.0, span=(0.8, 0.9))
+    r = sweep_walkers(bank, path, **WALKERS, record=record, method="integrate")
+    assert r.solved.all() and not r.newton.any()
+    with pytest.raises(ValueError, match="record"):
+        sweep_walkers(bank, path, **WALKERS, record=record[:-1])
