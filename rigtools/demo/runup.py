@@ -102,8 +102,8 @@ RUNUP_CALIBRATION: Final[dict[str, dict[str, int]]] = {
     "ci": {"walkers": 16, "max_steps": 600, "max_speed_points": 40},
     # 16 walkers, 30 windows per direction and at most 800 steps: the three models calibrate
     # in minutes, not hours. A log-probability sweeps the whole ramp through continuation
-    # nodes 0.3 % apart (about 1300 nodes for 600 -> 5000 rpm); VVMS's tau is of the order of
-    # 100 steps here, so the report says the chains are not converged.
+    # nodes 0.3 % apart (those far from a fold skipped); VVMS's tau is about 60 steps here
+    # (6 free parameters), so the report says the chains are not converged.
     "full": {"walkers": 16, "max_speed_points": 30, "max_steps": 800},
 }
 #: The SDOF models the demo campaign calibrates against the run-up.
