@@ -196,8 +196,8 @@ WALKER_BASIN_REPEATS: Final = 2
 #: Continuation nodes (``record`` False) are skipped while the step in ``ln f_m`` from the last
 #: solved node to the next node stays within ``WALKER_SKIP_STEP`` ...
 WALKER_SKIP_STEP: Final = 0.03
-#: ... and that node was a Newton orbit whose multipliers keep ``1 - max |mu| >=
-#: WALKER_FOLD_MARGIN (1 - sqrt(det M))`` (far from a fold or flip; module notes).
+#: ... and that node was a Newton orbit whose multipliers keep ``|det(M -+ I)| >=
+#: WALKER_FOLD_MARGIN (1 - sqrt(det M))^2`` (far from a fold or flip; module notes).
 WALKER_FOLD_MARGIN: Final = 1.0
 #: ... and the orbit's predicted move over that step (its move from the entry state at the last
 #: solved node per unit ``ln f_m``, times the step) stays within this fraction of the guard.

@@ -74,7 +74,12 @@ from rigtools.calibration.campaign_inputs import (
 from rigtools.calibration.comparison import ModelComparison, compare_variants
 from rigtools.calibration.config import CalibrationConfig
 from rigtools.calibration.errors import CalibrationError
-from rigtools.calibration.runup_data import RunUpData, has_interior_maximum, prepare_runups
+from rigtools.calibration.runup_data import (
+    RunUpData,
+    direction_stretches,
+    has_interior_maximum,
+    prepare_runups,
+)
 from rigtools.calibration.runup_forward import (
     DIRECTIONS,
     RunUpForward,
@@ -176,7 +181,7 @@ def _fit_model(post: RunUpPosterior, config: CalibrationConfig, *, seed: int, in
     predictive = []
     any_impact = np.zeros(m, dtype=bool)
     ell = p["model_error_length"]
-    blk_parts, b_run = [], []
+    blk_parts = []
     for r, (curve, y, gaps, sw) in enumerate(zip(fwd.curves, post.log_observed, post.gaps,
                                                  sweeps, strict=True)):
         mean, cov = gain_conditional(y, sw.log_mu, tau, sigma, post.gain_prior,
@@ -194,9 +199,7 @@ def _fit_model(post: RunUpPosterior, config: CalibrationConfig, *, seed: int, in
         blocks = loo_blocks(curve.direction)
         pb = pointwise_log_likelihood(y, sw.log_mu, tau, sigma, post.gain_prior,
                                       error_length=ell, gaps=gaps, groups=blocks)
-        kept = ~np.isnan(pb).all(axis=0)
-        blk_parts.append(pb[:, kept])
-        b_run.append(np.full(int(kept.sum()), r))
+        blk_parts.append(pb[:, ~np.isnan(pb).all(axis=0)])
         cc, ii = np.nonzero(np.isfinite(y))
         noise = (sample_model_error(tau, ell, gaps, rng)[:, None, :]
                  + sigma[:, None, None] * rng.standard_normal((m, *y.shape)))
@@ -240,7 +243,7 @@ def _fit_model(post: RunUpPosterior, config: CalibrationConfig, *, seed: int, in
         obs_run=np.concatenate(o_run), obs_channel=np.concatenate(o_chan),
         obs_point=np.concatenate(o_pt), loo_run=np.concatenate(l_run),
         loo_point=np.concatenate(l_pt), block_log_likelihood=block_lik,
-        block_run=np.concatenate(b_run), gain_labels=tuple(labels),
+        gain_labels=tuple(labels),
         predictive=tuple(predictive), summary=summary, warnings=tuple(fit_warn),
         seconds=seconds)
 
@@ -263,14 +266,11 @@ def loo_blocks(direction: np.ndarray) -> np.ndarray:
     >>> loo_blocks(np.array(["up"] * 12 + ["down"] * 3)).tolist()
     [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 2, 2, 2]
     """
-    d = np.asarray(direction, dtype=object)
-    out = np.empty(d.size, dtype=np.int64)
-    label, count = -1, 0
-    for i in range(d.size):
-        if i == 0 or d[i] != d[i - 1] or count == BLOCK_POINTS:
-            label, count = label + 1, 0
-        out[i] = label
-        count += 1
+    out = np.empty(len(direction), dtype=np.int64)
+    first = 0
+    for a, b in direction_stretches(np.asarray(direction, dtype=object)):
+        out[a:b] = first + np.arange(b - a) // BLOCK_POINTS
+        first = int(out[b - 1]) + 1
     return out
 
 

@@ -82,6 +82,7 @@ __all__ = [
     "RunUpCurve",
     "RunUpData",
     "RunUpDataError",
+    "direction_stretches",
     "has_interior_maximum",
     "prepare_runup",
     "prepare_runups",
@@ -392,8 +393,23 @@ def _points(rows: pd.DataFrame, channels: list[str], rel_tolerance: float) -> _P
                    _window_nodes(keys, t_stop, t_mid, f_pt, ramp))
 
 
-def _stretches(direction: np.ndarray) -> list[tuple[int, int]]:
-    """(start, stop) of each run of one direction."""
+def direction_stretches(direction: np.ndarray) -> list[tuple[int, int]]:
+    """``(start, stop)`` of each run of one direction in time order.
+
+    Parameters
+    ----------
+    direction : numpy.ndarray
+        ``(N,)``.
+
+    Returns
+    -------
+    list of tuple of int
+
+    Examples
+    --------
+    >>> direction_stretches(np.array(["up", "up", "down"], dtype=object))
+    [(0, 2), (2, 3)]
+    """
     out = []
     start = 0
     for i in range(1, direction.size + 1):
@@ -410,7 +426,7 @@ def _representative(x: np.ndarray, group: np.ndarray) -> int:
 
 def _thin(p: _Points, max_points: int) -> tuple[_Points, list[str]]:
     """Each direction thinned to about ``max_points`` windows (module notes)."""
-    stretches = _stretches(p.direction)
+    stretches = direction_stretches(p.direction)
     totals: dict[str, int] = {}
     for a, b in stretches:
         totals[str(p.direction[a])] = totals.get(str(p.direction[a]), 0) + (b - a)

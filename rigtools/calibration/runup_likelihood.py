@@ -260,11 +260,7 @@ def _ldl_solve(diag: np.ndarray, off: np.ndarray, rhs: np.ndarray
 class _Woodbury:
     """The solved pieces of one run for ``W`` walkers (module notes)."""
 
-    run: _Run
-    diag: np.ndarray       # (W, N) tilde A
-    off: np.ndarray        # (W, N - 1)
     u: np.ndarray          # (W, N) tilde A^-1 b_delta
-    t: np.ndarray          # (W, N, C) tilde A^-1 Z^T X / sigma^2
     schur: np.ndarray      # (W, C, C) S
     c: np.ndarray          # (W, C) b_g - A_g,delta A_delta^-1 b_delta
     b_delta: np.ndarray    # (W, N)
@@ -286,7 +282,7 @@ def _woodbury(run: _Run, prior: GainPrior) -> _Woodbury:
     schur = (np.diag(m.sum(axis=1))[None] / s2[:, None, None] + np.eye(m.shape[0])[None]
              / prior.sd ** 2 - t2[:, None, None] * cross)
     c = b_gain - t2[:, None] * np.einsum("cn,wn->wc", m, u) / s2[:, None]
-    return _Woodbury(run, diag, off, u, t, schur, c, b_delta, logdet_r + logdet_a)
+    return _Woodbury(u, schur, c, b_delta, logdet_r + logdet_a)
 
 
 def marginal_log_likelihood(log_observed: ArrayLike, log_mu: ArrayLike, model_error: ArrayLike,
@@ -386,7 +382,7 @@ def pointwise_log_likelihood(log_observed: ArrayLike, log_mu: ArrayLike,
     -------
     numpy.ndarray
         ``(W, G)`` (``G = N`` without ``groups``); NaN for a unit no channel observes (the
-        caller keeps the observed ones), ``-inf`` where the walker's model fails at the unit.
+        caller keeps the observed ones), ``-inf`` for a walker whose marginal is impossible.
     """
     y = np.asarray(log_observed, dtype=float)
     n = y.shape[-1] if y.ndim == 2 else 0

@@ -172,8 +172,6 @@ class RunUpFit:
     block_log_likelihood : numpy.ndarray
         ``(W, n, B)`` leave-one-out log density of each observed block of neighbouring points
         (:func:`~rigtools.calibration.runup_api.loo_blocks`).
-    block_run : numpy.ndarray
-        ``(B,)`` index of each block's run.
     gain_labels : tuple of str
         ``"<run>/<channel>"`` for the ``G`` gains.
     predictive : tuple of RunPredictive
@@ -199,7 +197,6 @@ class RunUpFit:
     loo_run: np.ndarray
     loo_point: np.ndarray
     block_log_likelihood: np.ndarray
-    block_run: np.ndarray
     gain_labels: tuple[str, ...]
     predictive: tuple[RunPredictive, ...]
     summary: dict[str, Any]
