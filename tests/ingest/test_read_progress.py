@@ -11,14 +11,18 @@ from __future__ import annotations
 
 import gzip
 import io
+import os
 import shutil
 import sys
+import threading
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import rigtools.cli.common as common
+import rigtools.ingest.files as files_mod
 import rigtools.ingest.stream_reader as stream_reader
 from rigtools.cli import main
 from rigtools.demo.can_writer import encode_reference_frames, write_can_log
@@ -41,24 +45,48 @@ def files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
                                      rng=2)
     out["blf"] = write_can_log(d / "run.blf", frames, "blf")
     out["log"] = write_can_log(d / "run.log", frames, "log")
-    # the gzip log ten times as long: its read must outlast many polls of the progress thread
-    # (a fast reader finishes a short file between two of them on a busy machine)
-    long_can = [np.round(rng.normal(0, 100, 30 * 4000)) * 0.015 for _ in range(4)]
-    long_log = write_can_log(d / "long.log", encode_reference_frames(
-        long_can, {"Torque_Nm": 302.0, "PinionSpeed_rpm": 1500.0}, rng=2), "log")
-    with open(long_log, "rb") as src, gzip.open(d / "run.log.gz", "wb") as dst:
+    with open(out["log"], "rb") as src, gzip.open(d / "run.log.gz", "wb") as dst:
         shutil.copyfileobj(src, dst)
     out["gz"] = d / "run.log.gz"
     out["parquet"] = write_parquet(read(out["mcap"]), d / "run.parquet")
     return out
 
 
+def _paced(fn: Callable[..., object], reported: threading.Event) -> Callable[..., object]:
+    """``fn`` that, from its second call on, first waits for a progress report.
+
+    The progress thread polls; a reader that finishes a small file between two polls (a busy
+    machine, a single MCAP chunk) would show no report from inside the read. Pacing the
+    reader's own reads by the reports makes that deterministic without a longer file.
+    """
+    calls = 0
+
+    def paced(*args: object) -> object:
+        nonlocal calls
+        if calls:
+            reported.clear()
+            reported.wait(10.0)
+        calls += 1
+        return fn(*args)
+    return paced
+
+
 @pytest.mark.parametrize("kind", ["mcap", "blf", "log", "gz", "parquet"])
 def test_progress_rises_to_the_file_size(files: dict[str, Path], kind: str,
                                          monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(stream_reader, "PROGRESS_INTERVAL_S", 0.0005)
+    reported = threading.Event()
+    if kind == "mcap":   # read at positions (os.pread), by the reader and its chunk worker
+        monkeypatch.setattr(os, "pread", _paced(os.pread, reported))
+    elif kind == "gz":
+        monkeypatch.setattr(files_mod._GuardedGzip, "readinto",
+                            _paced(files_mod._GuardedGzip.readinto, reported))
     seen: list[tuple[int, int]] = []
-    rec = read(files[kind], progress=lambda done, total: seen.append((done, total)))
+
+    def progress(done: int, total: int) -> None:
+        seen.append((done, total))
+        reported.set()
+    rec = read(files[kind], progress=progress)
     size = files[kind].stat().st_size
     assert rec.channels
     assert seen[-1] == (size, size)
