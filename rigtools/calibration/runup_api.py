@@ -167,7 +167,7 @@ def _fit_model(post: RunUpPosterior, config: CalibrationConfig, *, seed: int, in
     run = run_sampler(post, post.priors, settings, checkpoint=checkpoint,
                       checkpoint_name=f"runup-{post.kind}",
                       fingerprint=_fingerprint(config, fwd), progress=progress,
-                      map_estimate=map_est)
+                      map_estimate=map_est, log_scale=post.log_scale)
     samples, lp = _draws(run)
     w, n, d = samples.shape
     m = w * n

@@ -80,6 +80,7 @@ from numpy.typing import ArrayLike
 
 __all__ = [
     "MAX_CORRELATION",
+    "MIN_CHANNEL_ERROR",
     "GainPrior",
     "error_gaps",
     "gain_conditional",
@@ -93,6 +94,12 @@ _LOG_2PI: Final = math.log(2.0 * math.pi)
 #: frequency, e.g. of a hold, are the same discrepancy; the cap keeps the chain's precision
 #: finite: ``1 / (1 - rho^2)`` at most 5e5).
 MAX_CORRELATION: Final = 1.0 - 1e-6
+#: Smallest channel error ``sigma`` the likelihood takes (below it: ``-inf``). The Woodbury
+#: form divides by ``sigma^2``; where the channels agree exactly (noise-free synthetic data)
+#: the likelihood grows without bound as ``sigma -> 0`` and walkers moving in ``ln sigma``
+#: follow it until the Schur complement is singular. No Arms estimate from a recording is
+#: relatively more precise than this.
+MIN_CHANNEL_ERROR: Final = 1e-6
 
 
 @dataclass(frozen=True)
@@ -217,7 +224,8 @@ def _run(log_observed: ArrayLike, log_mu: ArrayLike, model_error: ArrayLike,
         r = y[None, :, :] - mu[:, None, :] - prior.mean
     bad = np.any(mask[None] & ~np.isfinite(r), axis=(1, 2))
     r = np.where(mask[None] & np.isfinite(r), r, 0.0)
-    ok = (sigma > 0) & (tau >= 0) & (ell >= 0) & np.isfinite(tau) & np.isfinite(ell)
+    ok = ((sigma >= MIN_CHANNEL_ERROR) & np.isfinite(sigma) & (tau >= 0) & (ell >= 0)
+          & np.isfinite(tau) & np.isfinite(ell))
     s2 = np.where(ok, sigma * sigma, 1.0)
     t2 = np.where(ok, tau * tau, 0.0)
     return _Run(r, mask.astype(float), bad, s2, t2,
@@ -301,7 +309,8 @@ def marginal_log_likelihood(log_observed: ArrayLike, log_mu: ArrayLike, model_er
     model_error : array_like
         ``tau``, ``(W,)`` (>= 0): marginal sd of the error shared by the channels at a point.
     channel_error : array_like
-        ``sigma``, ``(W,)`` (> 0): each channel's own error.
+        ``sigma``, ``(W,)`` (>= :data:`MIN_CHANNEL_ERROR`, else ``-inf``): each channel's own
+        error.
     prior : GainPrior
     error_length : array_like, optional
         ``ell``, ``(W,)`` (>= 0): the model error's correlation length in ``ln f_m``. None:
@@ -325,14 +334,16 @@ def marginal_log_likelihood(log_observed: ArrayLike, log_mu: ArrayLike, model_er
     run = _run(log_observed, log_mu, model_error, channel_error, prior, error_length, gaps)
     k = _woodbury(run, prior)
     sign, logdet_s = np.linalg.slogdet(k.schur)
-    solved = np.linalg.solve(k.schur, k.c[..., None])[..., 0]
+    usable = np.isfinite(logdet_s) & (sign > 0)   # else -inf below, never a LinAlgError
+    schur = np.where(usable[:, None, None], k.schur, np.eye(k.schur.shape[1])[None])
+    solved = np.linalg.solve(schur, k.c[..., None])[..., 0]
     c = run.mask.shape[0]
     n = run.mask.sum()
     quad = (np.sum(run.r * run.r, axis=(1, 2)) / run.s2
             - run.t2 * np.sum(k.b_delta * k.u, axis=1) - np.sum(k.c * solved, axis=1))
     out = -0.5 * (n * (_LOG_2PI + np.log(run.s2)) + k.logdet + c * math.log(prior.sd ** 2)
                   + logdet_s + quad)
-    good = run.ok & ~run.bad & (sign > 0) & np.isfinite(out)
+    good = run.ok & ~run.bad & usable & np.isfinite(out)
     return np.where(good, out, -np.inf)
 
 

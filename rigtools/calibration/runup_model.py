@@ -78,6 +78,17 @@ class RunUpPosterior:
         return self.forward.kind
 
     @property
+    def log_scale(self) -> tuple[bool, ...]:
+        """Per free parameter: sampled as ``ln x`` (a log-normal or half-normal prior).
+
+        The damping ratio, the stiffness scales and the three error parameters are positive
+        and scale-like; the backlash (uniform from 0, reached where there are no back-side
+        impacts) stays in um. See :func:`rigtools.calibration.sampler.run_sampler`.
+        """
+        return tuple(p.dist in ("lognormal", "halfnormal") and p.lower >= 0.0
+                     for p in self.priors)
+
+    @property
     def ndim(self) -> int:
         """Free parameters."""
         return len(self.names)

@@ -17,6 +17,7 @@ from scipy import integrate, linalg, stats
 from rigtools.calibration.runup_forward import acceleration_arms, jump_frequencies
 from rigtools.calibration.runup_likelihood import (
     MAX_CORRELATION,
+    MIN_CHANNEL_ERROR,
     GainPrior,
     error_gaps,
     gain_conditional,
@@ -286,3 +287,24 @@ def test_sampled_model_errors_have_the_modelled_covariance() -> None:
     # sd of a sample covariance entry <= tau^2 sqrt(2 / m) = 6e-4; 5 sd
     np.testing.assert_allclose(np.cov(d, rowvar=False), ref, atol=5 * tau**2 * math.sqrt(2 / m))
     assert abs(np.corrcoef(d[:, 4], d[:, 5])[0, 1]) < 0.02      # up and down independent
+
+
+def test_a_vanishing_channel_error_is_minus_infinity_never_an_exception() -> None:
+    """Channels that agree exactly: ``-inf`` below MIN_CHANNEL_ERROR, never a LinAlgError.
+
+    With noise-free synthetic data the likelihood grows as ``sigma -> 0``; no ``sigma`` down
+    to 1e-300 may raise (walkers moving in ``ln sigma`` reached 1e-9 in a test before the
+    floor, where the Schur complement was singular).
+    """
+    rng = np.random.default_rng(4)
+    mu = np.log(np.linspace(1.0, 3.0, 12))
+    delta = 0.05 * rng.standard_normal(12)
+    y = np.stack([mu + delta + g for g in (0.1, -0.3, 0.2)])
+    sig = np.array([1e-300, 1e-12, 1e-8, MIN_CHANNEL_ERROR, 1e-4, 1e-2])
+    w = sig.size
+    ll = marginal_log_likelihood(y, np.tile(mu, (w, 1)), np.full(w, 0.05), sig,
+                                 GainPrior(0.0, 1.0), error_length=np.full(w, 0.1),
+                                 gaps=error_gaps(np.exp(mu), np.array(["up"] * 12)))
+    assert np.all(ll[sig < MIN_CHANNEL_ERROR] == -np.inf)
+    assert np.all(np.isfinite(ll[sig >= MIN_CHANNEL_ERROR]))
+    assert ll[3] > ll[4] > ll[5]          # it grows as sigma falls: the floor is what bounds it
