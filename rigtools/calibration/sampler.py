@@ -78,7 +78,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Final
@@ -638,7 +638,7 @@ def _tau_due(history: list[tuple[int, tuple[float, ...], int]], iteration: int,
     return near or iteration - start >= TAU_GROWTH * (last_it - start)
 
 
-def _is_converged(history: list[tuple[int, tuple[float, ...], int]]) -> bool:
+def _is_converged(history: Sequence[tuple[int, tuple[float, ...], int]]) -> bool:
     """The rule of module notes, 3, on the chain after the last estimate's warm-up."""
     if len(history) < 2:
         return False
