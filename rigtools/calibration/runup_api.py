@@ -22,8 +22,11 @@ Steps (issue 20):
    (:mod:`~rigtools.calibration.runup_forward`), the log posterior with the gains
    marginalised (:mod:`~rigtools.calibration.runup_model`), the MAP by vectorised
    differential evolution (:func:`~rigtools.calibration.runup_map.find_runup_map`) and emcee
-   to the autocorrelation rule with the unchanged :func:`~rigtools.calibration.sampler.run_sampler`,
-   resumable from ``<outdir>/runup/chains.h5`` (group ``runup-<model>``).
+   to the autocorrelation rule with :func:`~rigtools.calibration.sampler.run_sampler`, the
+   positive parameters moved in log coordinates
+   (:attr:`~rigtools.calibration.runup_model.RunUpPosterior.log_scale`), resumable from
+   ``<outdir>/runup/chains.h5`` (group ``runup-<model>``); :data:`RUNUP_WALKERS` walkers
+   unless configured.
 3. From at most :data:`~rigtools.calibration.runup_outputs.MAX_STORED_DRAWS` posterior draws:
    the gains drawn from their exact conditional, the leave-one-out log density per (run,
    point) with its channels together (they share the model error; the exact Gaussian
@@ -108,6 +111,7 @@ from rigtools.campaign.manifest import Campaign, load_campaign
 __all__ = [
     "BLOCK_POINTS",
     "CHECKPOINT_FILE",
+    "RUNUP_WALKERS",
     "calibrate_runup_data",
     "calibrate_runups",
     "loo_blocks",
@@ -117,6 +121,12 @@ __all__ = [
 CHECKPOINT_FILE: Final = "chains.h5"
 #: Neighbouring points per block of the blocked PSIS-LOO check.
 BLOCK_POINTS: Final = 10
+#: Walkers of a run-up calibration unless ``[calibration.runup]`` or ``[calibration]`` sets
+#: them (at least ``2 D + 2``, even). A step costs a sweep per walker, so the wall time to
+#: the autocorrelation rule is linear in the walkers while ``tau`` in steps hardly falls
+#: with more of them; with 16 the demo's VVMS run-up (6 parameters) converged in 2700 steps,
+#: 570 s on 2 cores (issue 20, must-hold 4).
+RUNUP_WALKERS: Final = 16
 
 
 def _q(x: np.ndarray) -> dict[str, float] | None:
@@ -155,8 +165,12 @@ def _fit_model(post: RunUpPosterior, config: CalibrationConfig, *, seed: int, in
     t0 = time.perf_counter()
     fwd = post.forward
     ru = config.runup
+    walkers = ru.walkers if ru.walkers is not None else config.walkers
+    if walkers is None:
+        walkers = max(RUNUP_WALKERS, 2 * post.ndim + 2)
+        walkers += walkers % 2
     settings = SamplerSettings(
-        walkers=ru.walkers if ru.walkers is not None else config.walkers,
+        walkers=walkers,
         max_steps=ru.max_steps if ru.max_steps is not None else config.max_steps,
         check_every=config.check_every, seed=seed, map_starts=config.map_starts)
     walkers = settings.n_walkers(post.ndim)

@@ -12,7 +12,7 @@ the defaults)::
     min_speed_points = 20         # usable points per run below which the run is refused
     min_span = 1.3                # max/min mesh frequency a run-up must span
     steps_per_period = 64         # RK4 steps per mesh period of the model sweeps
-    walkers = 32                  # default: [calibration] walkers
+    walkers = 16                  # default: [calibration] walkers if given, else 16
     max_steps = 20000             # default: [calibration] max_steps
 
     [calibration.runup.priors]    # the same prior tables as [calibration.priors]
@@ -171,7 +171,8 @@ class RunUpSettings:
     steps_per_period : int
         Integration steps per mesh period of the model sweeps.
     walkers : int or None
-        Walkers of the ensemble sampler; None: the ``[calibration]`` setting.
+        Walkers of the ensemble sampler; None: the ``[calibration]`` setting if given, else
+        :data:`~rigtools.calibration.runup_api.RUNUP_WALKERS` (at least ``2 D + 2``).
     max_steps : int or None
         Largest number of sampler steps; None: the ``[calibration]`` setting.
     parameters : tuple of ParameterSpec
