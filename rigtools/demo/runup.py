@@ -102,8 +102,9 @@ RUNUP_CALIBRATION: Final[dict[str, dict[str, int]]] = {
     "ci": {"walkers": 16, "max_steps": 600, "max_speed_points": 40},
     # 16 walkers, 30 windows per direction and at most 800 steps: the three models calibrate
     # in minutes, not hours. A log-probability sweeps the whole ramp through continuation
-    # nodes 0.3 % apart (those far from a fold skipped); VVMS's tau is about 60 steps here
-    # (6 free parameters), so the report says the chains are not converged.
+    # nodes 0.3 % apart (those far from a fold skipped); VVMS's tau is 35-50 steps after the
+    # warm-up (6 free parameters; 2700 steps, 9.5 min, to the rule at 50 windows), so the
+    # report says the chains are not converged.
     "full": {"walkers": 16, "max_speed_points": 30, "max_steps": 800},
 }
 #: The SDOF models the demo campaign calibrates against the run-up.
