@@ -444,9 +444,12 @@ def run_sampler(
                                         moves=_moves(), backend=backend)
         if resumed:
             data = backend.checkpoint_data()
-            history = [(int(h[0]), tuple(float(t) for t in h[1]), int(h[2]))
-                       for h in data.get("tau_history", [])]
             resets = [int(i) for i in data.get("resets", [])]
+            # (iteration, tau[, warm]): a checkpoint written before the warm-up counted from
+            # the last reset
+            history = [(int(h[0]), tuple(float(t) for t in h[1]),
+                        int(h[2]) if len(h) > 2 else (resets[-1] if resets else 0))
+                       for h in data.get("tau_history", [])]
             state: Any = backend.get_last_sample()
         else:
             sampler.random_state = np.random.RandomState(settings.seed).get_state()
