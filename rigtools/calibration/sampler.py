@@ -102,7 +102,9 @@ __all__ = [
     "SamplerRun",
     "SamplerSettings",
     "find_map",
+    "is_converged",
     "reset_floor",
+    "reset_stragglers",
     "run_sampler",
     "start_ball",
     "warm_up_end",
@@ -468,10 +470,10 @@ def run_sampler(
         chain = np.empty((0, walkers, ndim))
         lp = np.empty((0, walkers))
     if resets and resets[-1] == resumed:   # killed right after a reset: apply it again
-        state, _ = _reset_stragglers(state, lp, sampling_log_prob, seed=settings.seed,
+        state, _ = reset_stragglers(state, lp, sampling_log_prob, seed=settings.seed,
                                      iteration=resumed)
     start = resets[-1] if resets else 0
-    converged = _is_converged(history)
+    converged = is_converged(history)
     t0 = time.perf_counter()
     while not converged and iteration < settings.max_steps:
         n = min(settings.check_every - iteration % settings.check_every,
@@ -488,10 +490,10 @@ def run_sampler(
             warm = warm_up_end(lp, start)
             tau = integrated_time(chain[warm:])
             history.append((iteration, tuple(float(t) for t in tau), warm))
-            converged = _is_converged(history)
+            converged = is_converged(history)
         if not converged and RESET_WINDOW <= iteration <= settings.reset_until \
                 and iteration < settings.max_steps:
-            state, moved = _reset_stragglers(state, lp, sampling_log_prob, seed=settings.seed,
+            state, moved = reset_stragglers(state, lp, sampling_log_prob, seed=settings.seed,
                                              iteration=iteration)
             if moved:
                 resets.append(iteration)
@@ -550,7 +552,7 @@ def reset_floor(ndim: int) -> float:
     return 0.5 * float(chi2.ppf(RESET_QUANTILE, ndim) - chi2.ppf(0.5, ndim))
 
 
-def _reset_stragglers(state: Any, lp_chain: np.ndarray,
+def reset_stragglers(state: Any, lp_chain: np.ndarray,
                       log_prob: Callable[[np.ndarray], np.ndarray], *, seed: int,
                       iteration: int) -> tuple[Any, bool]:
     """Move walkers stranded far below the ensemble onto the others (module notes).
@@ -641,7 +643,7 @@ def _tau_due(history: list[tuple[int, tuple[float, ...], int]], iteration: int,
     return near or iteration - start >= TAU_GROWTH * (last_it - start)
 
 
-def _is_converged(history: Sequence[tuple[int, tuple[float, ...], int]]) -> bool:
+def is_converged(history: Sequence[tuple[int, tuple[float, ...], int]]) -> bool:
     """The rule of module notes, 3, on the chain after the last estimate's warm-up."""
     if len(history) < 2:
         return False

@@ -16,10 +16,10 @@ from rigtools.calibration.priors import prior_from_mapping
 from rigtools.calibration.sampler import (
     MapEstimate,
     SamplerSettings,
-    _is_converged,
-    _reset_stragglers,
     find_map,
+    is_converged,
     reset_floor,
+    reset_stragglers,
     run_sampler,
 )
 
@@ -210,9 +210,9 @@ def test_a_stranded_walker_is_moved_and_a_tail_walker_is_not() -> None:
     def lp(theta: np.ndarray) -> np.ndarray:
         return -0.5 * np.sum(np.atleast_2d(theta) ** 2, axis=1)
 
-    _, moved = _reset_stragglers(_state(coords, tail[-1]), tail, lp, seed=1, iteration=100)
+    _, moved = reset_stragglers(_state(coords, tail[-1]), tail, lp, seed=1, iteration=100)
     assert not moved
-    st, moved = _reset_stragglers(_state(coords, stranded[-1]), stranded, lp, seed=1,
+    st, moved = reset_stragglers(_state(coords, stranded[-1]), stranded, lp, seed=1,
                                   iteration=100)
     assert moved
     new = np.asarray(st.coords)
@@ -280,10 +280,10 @@ def test_the_stability_condition_tells_a_growing_tau_from_a_noisy_one() -> None:
     """
     steps = list(range(1000, 3001, 100))
     growing = [(n, (40.0 * math.sqrt(n / 3000), 10.0), 0) for n in steps]
-    assert not _is_converged(growing)
+    assert not is_converged(growing)
     wobble = [(n, (40.0 * (1 + 0.03 * (-1) ** k), 10.0), 0) for k, n in enumerate(steps)]
-    assert _is_converged(wobble)
+    assert is_converged(wobble)
     short = [(n, (80.0, 10.0), 0) for n in steps]          # 3000 < 50 * 80
-    assert not _is_converged(short)
+    assert not is_converged(short)
     # counted from the warm-up: 3000 steps of which the first 1200 are travel
-    assert not _is_converged([(n, t, 1200) for n, t, _ in wobble])
+    assert not is_converged([(n, t, 1200) for n, t, _ in wobble])
