@@ -332,11 +332,12 @@ def start_ball(center: np.ndarray, priors: tuple[Prior, ...], walkers: int,
     c = np.clip(center, lo + _BALL * sd, hi - _BALL * sd)
     out = c + _BALL * sd * rng.standard_normal((walkers, len(priors)))
     for _ in range(100):
-        bad = (out < lo) | (out > hi)
+        bad = (out <= lo) | (out >= hi)
         if not bad.any():
             break
         out = np.where(bad, c + _BALL * sd * rng.standard_normal(out.shape), out)
-    return np.clip(out, lo, hi)
+    # strictly inside: a bound is -inf in log coordinates
+    return np.where((out <= lo) | (out >= hi), c, out)
 
 
 @dataclass(frozen=True)

@@ -4,11 +4,16 @@ from __future__ import annotations
 
 import tomllib
 from collections.abc import Callable
+from typing import cast
 
 import pytest
 
 from rigtools.calibration import CalibrationConfig, default_config, parse_calibration_block
+from rigtools.calibration.priors import prior_from_mapping
 from rigtools.calibration.runup_config import RUNUP_MODELS, RUNUP_PARAMETERS, RunUpSettings
+from rigtools.calibration.runup_forward import RunUpForward
+from rigtools.calibration.runup_likelihood import GainPrior
+from rigtools.calibration.runup_model import RunUpPosterior
 from rigtools.errors import CampaignError
 from rigtools.schemas import iter_errors
 
@@ -117,3 +122,24 @@ def test_errors_name_the_key_and_its_line(
     with pytest.raises(CampaignError, match=pattern) as info:
         parse_campaign_text(campaign_text(block))
     assert str(info.value).startswith(f"c.toml at line {line}: expected "), str(info.value)
+
+
+def test_every_parameter_with_a_positive_support_is_moved_in_log_coordinates() -> None:
+    """Default priors: all six free run-up parameters are moved in ``ln x``.
+
+    The backlash included (its prior reaches 0); a prior reaching below 0 is moved in its own
+    units.
+    """
+    st = default_config().runup
+    names = ("zeta", "mesh_stiffness_scale", "backlash", "model_error", "model_error_length",
+             "channel_error")
+    priors = tuple(st.parameter(n).prior for n in names)
+    assert all(p is not None for p in priors)
+    post = RunUpPosterior(forward=cast(RunUpForward, None), names=names,
+                          priors=cast(tuple, priors), fixed={}, gain_prior=GainPrior(0.0, 1.0),
+                          log_observed=(), gaps=())
+    assert post.log_scale == (True,) * 6
+    wide = prior_from_mapping({"dist": "uniform", "lower": -10.0, "upper": 300.0})
+    post = RunUpPosterior(forward=cast(RunUpForward, None), names=("backlash",), priors=(wide,),
+                          fixed={}, gain_prior=GainPrior(0.0, 1.0), log_observed=(), gaps=())
+    assert post.log_scale == (False,)

@@ -149,6 +149,46 @@ def test_log_coordinates_shorten_tau_of_a_skewed_parameter() -> None:
     assert log.tau[0] < 0.8 * lin.tau[0], (log.tau, lin.tau)
 
 
+# A gap parameter b (uniform on [0, 300]) whose posterior, like the FVMS backlash on a
+# VVMS-made run-up, has half its mass in a sliver b <= 3 (density 99 times the plateau's)
+# reached along a ridge on which a second parameter z moves by 10 sd (0 below b = 3, 1
+# above b = 10). Exact: P(b <= 3) = 3 * 99 / (3 * 99 + 297) = 0.5.
+GAP_PRIORS = (prior_from_mapping({"dist": "uniform", "lower": 0.0, "upper": 300.0}),
+              prior_from_mapping({"dist": "uniform", "lower": -5.0, "upper": 5.0}))
+
+
+def gap(theta: np.ndarray) -> np.ndarray:
+    th = np.atleast_2d(theta)
+    b, z = th[:, 0], th[:, 1]
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        mu = 1.0 / (1.0 + np.exp(-(np.log(b) - np.log(5.5)) / 0.15))
+        lp = np.where(b <= 3.0, np.log(99.0), 0.0) - 0.5 * ((z - mu) / 0.1) ** 2
+    return np.where((b > 0.0) & (b <= 300.0) & (np.abs(z) <= 5.0), lp, -np.inf)
+
+
+def test_log_coordinates_find_a_sliver_at_the_lower_bound() -> None:
+    """Walkers started on the plateau find the b <= 3 sliver in ``ln b``, not in ``b``.
+
+    Why the run-up backlash is moved in ``ln x`` (``RunUpPosterior.log_scale``). In ``b`` no
+    seed puts a draw there (every run "converges" on the plateau, P = 0); in ``ln b`` seeds
+    2-13 gave P(b <= 3) 0.46-0.52. Seed 1 stopped at 800 steps with the autocorrelation
+    rule met before a walker had come down the ridge (P = 0.003): no rule on ``tau`` sees a
+    region no walker has visited, hence 3 of 4 seeds here.
+    """
+    start = np.array([150.0, 1.0])
+    plateau = MapEstimate(theta=start, log_prob=float(gap(start)[0]), optima=start[None],
+                          optima_log_prob=gap(start))
+    found = 0
+    for seed in (1, 2, 3, 4):
+        st = SamplerSettings(walkers=16, max_steps=10000, seed=seed)
+        run = run_sampler(gap, GAP_PRIORS, st, map_estimate=plateau, log_scale=(True, False))
+        found += abs(np.mean(run.samples()[..., 0] <= 3.0) - 0.5) < 0.1
+        if seed <= 2:
+            lin = run_sampler(gap, GAP_PRIORS, st, map_estimate=plateau)
+            assert np.mean(lin.samples()[..., 0] <= 3.0) < 0.05
+    assert found >= 3
+
+
 def test_log_coordinates_need_a_positive_support() -> None:
     with pytest.raises(ValueError, match="reaches below 0"):
         run_sampler(gaussian, PRIORS, SamplerSettings(walkers=8, max_steps=10),
