@@ -56,7 +56,11 @@ r"""The emcee driver: MAP from several starts, a small ball, sampling until conv
    spread proportional to its size, and it trades against another one multiplicatively (a
    longer error correlation against a larger error), which the affine-invariant moves follow
    in ``u`` and not in ``x``: on the run-up posterior the error parameters' ``tau`` fell from
-   57-86 to 29-45 steps (session 7's measurement). ``tau`` and the convergence rule are
+   57-86 to 29-45 steps (session 7's measurement). And a region at the bottom of a wide
+   prior on ``[0, u]`` (a backlash of a few um on 0-300 um) is a sliver in ``x`` that walkers
+   on the plateau, whose differences are hundreds of um, hardly ever land in, while in ``u``
+   it is as wide as the plateau (``tests/calibration/test_sampler.py``: half the mass there,
+   none of it found in ``x``). ``tau`` and the convergence rule are
    computed in the coordinates the walkers move in; the returned chain, MAP and log posterior
    are in the parameters' own units (the log posterior without the Jacobian).
 6. **Burn-in and thinning** from the final ``tau``: discard ``2 max(tau)`` steps after the

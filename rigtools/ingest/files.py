@@ -8,7 +8,9 @@ The file's bytes are hashed as they are read (:class:`HashingFile`): a reader th
 file from the first byte to the last gets the SHA-256 of the provenance without a second pass
 over the file and without a second thread (SHA-256 runs at about a gigabyte a second on a
 core with the SHA extensions: a few percent of a text log's parsing); :func:`source_sha256`
-hashes what the reader left unread.
+hashes what the reader left unread. A reader that reads at positions (``os.pread``, the MCAP
+container and its chunk worker) hands what it read to :meth:`HashingFile.took_at`, from any
+thread, and the same holds: the bytes are hashed in the thread that read them, in file order.
 """
 
 from __future__ import annotations
@@ -16,33 +18,74 @@ from __future__ import annotations
 import gzip
 import hashlib
 import io
+import os
+import threading
 import zlib
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, BinaryIO
+from typing import Any, BinaryIO, Final
 
 from rigtools.ingest.recording import IngestReport
 
-__all__ = ["HashingFile", "TrackedFile", "open_source", "sha256_of", "source_sha256"]
+__all__ = ["HASH_GAP_BYTES", "HashingFile", "TrackedFile", "open_source", "sha256_of",
+           "source_sha256"]
+
+#: Largest run of unread bytes :meth:`HashingFile.took_at` reads itself to keep hashing in
+#: order (records a reader skips: message indexes, attachments); a read further ahead (the
+#: footer before the walk) is left for the walk to reach or for :meth:`HashingFile.sha256`.
+HASH_GAP_BYTES: Final = 16 << 20
 
 
 class HashingFile(io.FileIO):
     """A file opened for reading whose bytes are hashed (SHA-256) as they are read.
 
-    Reads that continue where the hashed part ends extend it; anything else (a seek back, a
-    read at a position, ``os.pread``) is read but not hashed, and :meth:`sha256` hashes the
-    rest of the file from the end of the hashed part.
+    Reads that continue where the hashed part ends extend it; so do reads at a position
+    (``os.pread``) that the reader hands to :meth:`took_at`. Anything else (a seek back, a
+    read far ahead) is read but not hashed, and :meth:`sha256` hashes the rest of the file
+    from the end of the hashed part. Thread-safe: :meth:`took_at` may be called from the
+    threads that read.
     """
 
     def __init__(self, path: str | Path) -> None:
         super().__init__(path, "rb")
         self._sha = hashlib.sha256()
         self._hashed = 0
+        self._lock = threading.Lock()
 
     def _took(self, at: int, data: Any, n: int) -> None:
-        if n > 0 and at == self._hashed:
-            self._sha.update(memoryview(data)[:n])
-            self._hashed += n
+        if n > 0 and at <= self._hashed < at + n:
+            with self._lock:
+                skip = self._hashed - at
+                if 0 <= skip < n:
+                    self._sha.update(memoryview(data)[skip:n])
+                    self._hashed = at + n
+
+    @property
+    def hashed(self) -> int:
+        """Bytes from the start of the file hashed so far."""
+        return self._hashed
+
+    def took_at(self, at: int, data: bytes) -> None:
+        """Hash ``data``, read at byte ``at`` of the file, if it extends the hashed part.
+
+        Where it starts after the hashed part by at most :data:`HASH_GAP_BYTES`, the bytes
+        between are read (``os.pread``) and hashed first; a piece already hashed, or further
+        ahead, is ignored.
+        """
+        n = len(data)
+        if n == 0 or at + n <= self._hashed or at > self._hashed + HASH_GAP_BYTES:
+            return
+        with self._lock:
+            while self._hashed < at:
+                gap = os.pread(self.fileno(), min(at - self._hashed, 1 << 20), self._hashed)
+                if not gap:
+                    return
+                self._sha.update(gap)
+                self._hashed += len(gap)
+            skip = self._hashed - at
+            if 0 <= skip < n:
+                self._sha.update(memoryview(data)[skip:])
+                self._hashed = at + n
 
     def readinto(self, b: Any) -> int | None:  # type: ignore[override]
         """Read into ``b`` (see :class:`io.FileIO`), hashing what extends the hashed part."""
@@ -64,10 +107,11 @@ class HashingFile(io.FileIO):
 
     def sha256(self) -> tuple[str, int]:
         """SHA-256 (hex) and size of the whole file; the unread rest is read now."""
-        h = self._sha.copy()
-        size = self._hashed
+        with self._lock:
+            h = self._sha.copy()
+            size = self._hashed
         with open(self.name, "rb") as f:
-            f.seek(self._hashed)
+            f.seek(size)
             while block := f.read(1 << 20):
                 h.update(block)
                 size += len(block)

@@ -21,7 +21,6 @@ import sys
 import threading
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterator
-from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
@@ -81,8 +80,10 @@ class Decoded:
 class StreamReader(ABC):
     """A format decoded from a byte stream into a builder; :meth:`read` is shared.
 
-    Subclasses set :attr:`name`, :attr:`units` and :attr:`hash_while_decoding` and implement
-    :meth:`sniff` and :meth:`decode`.
+    Subclasses set :attr:`name` and :attr:`units` and implement :meth:`sniff` and
+    :meth:`decode`. The file's SHA-256 for the provenance is computed from the bytes as the
+    decoder reads them (:func:`rigtools.ingest.files.source_sha256`): no second pass over the
+    file, no thread of its own.
 
     Attributes
     ----------
@@ -90,16 +91,10 @@ class StreamReader(ABC):
         Format name (the registry key, the ``reader`` of the provenance).
     units : str
         What the report counts: ``"frames"`` or ``"messages"``.
-    hash_while_decoding : bool
-        Hash the file's bytes as the decoder reads them, in order, in its own thread (True:
-        no second pass over the file, no second core), or in a second thread while the
-        channels are built after decoding (False, for a decoder that reads its file at
-        positions and keeps a second core busy).
     """
 
     name: str
     units: str
-    hash_while_decoding: bool
 
     @abstractmethod
     def sniff(self, head: bytes) -> bool:
@@ -145,48 +140,28 @@ class StreamReader(ABC):
         NoDataError
             The file reads but holds no decodable channel or slow signal.
         """
-        # CAN logs are read in order: their bytes are hashed as they are read (no second pass
-        # over the file, no second core taken from a machine running several reads). MCAP is
-        # read at positions by a reader that keeps a decompression worker busy on the second
-        # core: its file is hashed in a second thread (hashlib releases the GIL) beside the
-        # building of the channels.
-        hasher = ThreadPoolExecutor(max_workers=1, thread_name_prefix="rigtools-sha256")
-        try:
-            return self._read_with(path, request, hasher)
-        finally:
-            hasher.shutdown(wait=False)  # after a refusal, let the hash finish on its own
-
-    def _read_with(
-        self, p: Path, request: ReadRequest, hasher: ThreadPoolExecutor
-    ) -> Recording:
-        hashing: Future[tuple[str, int]] | None = None
-        own_digest: tuple[str, int] | None = None
         mapping = request.mapping
         if isinstance(mapping, str | Path):
             mapping = load_mapping(mapping)
         report = IngestReport(units=self.units)
-        builder = RecordingBuilder(str(p), report)
-        with open_source(p, report) as stream, _watching(stream, p, request.progress):
-            decoded = self.decode(stream, str(p), builder, report, mapping, request)
-            if self.hash_while_decoding:
-                own_digest = source_sha256(stream)
+        builder = RecordingBuilder(str(path), report)
+        with open_source(path, report) as stream, _watching(stream, path, request.progress):
+            decoded = self.decode(stream, str(path), builder, report, mapping, request)
+            # CAN logs are read in order, MCAP at positions (its chunk worker too): either way
+            # the bytes were hashed as they were read; this hashes only what was left unread
+            own_digest = source_sha256(stream) or sha256_of(path)
         meta = _merge_metadata(decoded.metadata, mapping, request.metadata, report)
         # Through JSON once, so the layout compares equal after a Parquet round trip.
         layout_desc = json.loads(json.dumps(decoded.layout))
-        if own_digest is None:
-            hashing = hasher.submit(sha256_of, p)
-        placeholder = Provenance(str(p), "", 0, self.name, versions(), report, layout_desc)
+        placeholder = Provenance(str(path), "", 0, self.name, versions(), report, layout_desc)
         rec = builder.build(meta, placeholder)
-        if own_digest is None:
-            assert hashing is not None  # submitted above
-            own_digest = hashing.result()
         digest, size = own_digest
         rec = dataclasses.replace(rec, provenance=dataclasses.replace(
             rec.provenance, source_sha256=digest, source_size_bytes=size))
         if not rec.channels and not rec.slow:
             reasons = ", ".join(f"{k}: {v}" for k, v in sorted(report.rejected.items())) or "none"
             raise NoDataError(
-                p, None, "at least one decodable channel or slow signal",
+                path, None, "at least one decodable channel or slow signal",
                 f"none ({report.decoded} {report.units} decoded; rejected {reasons})",
             )
         return rec

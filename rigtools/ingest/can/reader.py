@@ -46,8 +46,6 @@ class CanLogReader(StreamReader):
     """
 
     units = "frames"
-    # A log is read in order: its bytes are hashed as they are read.
-    hash_while_decoding = True
 
     def __init__(self, name: str, sniff: Callable[[bytes], bool],
                  iter_batches: BatchIterator) -> None:

@@ -277,9 +277,6 @@ class McapReader(StreamReader):
 
     name = NAME
     units = "messages"
-    # The reader keeps a decompression worker busy on the second core: the SHA-256 of the
-    # file runs after it, beside the building of the channels.
-    hash_while_decoding = False
 
     def __repr__(self) -> str:
         return "McapReader()"

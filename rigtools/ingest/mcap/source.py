@@ -7,7 +7,10 @@ read to what is left. Where it is not (a ``gzip`` stream), it reads in pieces of
 
 Where the size is known the source can also be read at a position without moving
 (:meth:`ByteSource.peek`, ``os.pread`` on a file), from any thread: the container reads the
-next chunk ahead with it.
+next chunk ahead with it. Whatever is read at a position from a file opened by
+:func:`~rigtools.ingest.files.open_source` is handed to its
+:meth:`~rigtools.ingest.files.HashingFile.took_at`: the provenance's SHA-256 is computed as
+the file is read.
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ from __future__ import annotations
 import io
 import os
 import stat
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import BinaryIO, Final
 
 __all__ = ["READ_PIECE_BYTES", "WINDOW_BYTES", "ByteSource", "known_size"]
@@ -86,6 +89,10 @@ class ByteSource:
             stream.position_probe = lambda: self._base + self.pos
         self._win = b""
         self._win_pos = 0
+        # what is read at positions is hashed for the provenance (files.HashingFile.took_at)
+        raw = getattr(stream, "raw", None)
+        self._took_at: Callable[[int, bytes], None] | None = (
+            getattr(raw, "took_at", None) if self._fd is not None else None)
 
     @property
     def size(self) -> int | None:
@@ -174,7 +181,10 @@ class ByteSource:
             parts.append(piece)
             n -= len(piece)
             off += len(piece)
-        return parts[0] if len(parts) == 1 else b"".join(parts)
+        data = parts[0] if len(parts) == 1 else b"".join(parts)
+        if self._took_at is not None:
+            self._took_at(self._base + pos, data)
+        return data
 
     def _pieces(self, n: int) -> Iterator[bytes]:
         """Read ``n`` bytes in pieces of at most :data:`READ_PIECE_BYTES`, or to the end."""
