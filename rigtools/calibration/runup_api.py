@@ -177,8 +177,7 @@ def _fit_model(post: RunUpPosterior, config: CalibrationConfig, *, seed: int, in
     if walkers < 2 * post.ndim:
         raise CalibrationError(f"{walkers} walkers for {post.ndim} free parameters; emcee "
                                f"needs at least {2 * post.ndim}", key="calibration.runup.walkers")
-    map_est = find_runup_map(post, post.priors, population=walkers, seed=seed,
-                             log_scale=post.log_scale)
+    map_est = find_runup_map(post, post.priors, population=walkers, seed=seed)
     run = run_sampler(post, post.priors, settings, checkpoint=checkpoint,
                       checkpoint_name=f"runup-{post.kind}",
                       fingerprint=_fingerprint(config, fwd), progress=progress,

@@ -25,7 +25,7 @@ MAP_GENERATIONS: Final = 60
 
 def find_runup_map(log_prob: Callable[[np.ndarray], np.ndarray], priors: tuple[Prior, ...],
                    *, population: int, seed: int, generations: int = MAP_GENERATIONS,
-                   keep: int = 4, log_scale: tuple[bool, ...] | None = None) -> MapEstimate:
+                   keep: int = 4) -> MapEstimate:
     """MAP by differential evolution, every generation one vectorised call.
 
     :func:`rigtools.calibration.sampler.find_map` screens 2048 prior draws and runs
@@ -36,13 +36,6 @@ def find_runup_map(log_prob: Callable[[np.ndarray], np.ndarray], priors: tuple[P
     selection, candidates outside the support rejected) until the population's log posterior
     spreads less than 0.05 or ``generations`` pass. The best members that are distinct
     (more than 0.05 prior sd apart) are the optima.
-
-    The mutations are made in the coordinates the sampler's walkers move in (``ln x`` where
-    ``log_scale``); the objective stays ``log_prob`` in the parameters' units. In ``x`` a
-    region at the bottom of a wide uniform prior (the FVMS posterior's backlash under 3 um
-    on a 0-300 um prior, where its density is highest on the demo's run-up) is a sliver
-    that differences of plateau members hardly ever land in; the chain then started on the
-    plateau and spent its first ~2000 steps finding it.
 
     Parameters
     ----------
@@ -55,8 +48,6 @@ def find_runup_map(log_prob: Callable[[np.ndarray], np.ndarray], priors: tuple[P
     generations : int
     keep : int
         Distinct optima reported.
-    log_scale : tuple of bool, optional
-        Per parameter: mutate ``ln x`` (only for a support within ``x > 0``).
 
     Returns
     -------
@@ -67,18 +58,6 @@ def find_runup_map(log_prob: Callable[[np.ndarray], np.ndarray], priors: tuple[P
     lo = np.array([p.lower for p in priors])
     hi = np.array([p.upper for p in priors])
     sd = np.array([max(p.moments()[1], 1e-12) for p in priors])
-    log = np.zeros(d, dtype=bool) if log_scale is None else np.array(log_scale, dtype=bool)
-    if log.shape != (d,) or np.any(log & ~(lo >= 0.0)):
-        raise ValueError(f"log_scale {log_scale} for priors with lower bounds {lo}")
-
-    def to_u(x: np.ndarray) -> np.ndarray:
-        with np.errstate(divide="ignore"):
-            return np.where(log, np.log(np.where(log, x, 1.0)), x)
-
-    def to_x(u: np.ndarray) -> np.ndarray:
-        with np.errstate(over="ignore"):
-            return np.where(log, np.exp(np.where(log, u, 0.0)), u)
-
     screen = np.column_stack([p.sample(rng, 4 * population) for p in priors])
     lp = log_prob(screen)
     order = np.argsort(-np.where(np.isfinite(lp), lp, -np.inf), kind="stable")[:population]
@@ -88,12 +67,11 @@ def find_runup_map(log_prob: Callable[[np.ndarray], np.ndarray], priors: tuple[P
         if np.all(np.isfinite(plp)) and np.ptp(plp) < 0.05:
             break
         idx = np.array([rng.choice(n, 3, replace=False) for _ in range(n)])
-        u = to_u(pop)
-        mutant = to_x(u[idx[:, 0]] + 0.7 * (u[idx[:, 1]] - u[idx[:, 2]]))
+        mutant = pop[idx[:, 0]] + 0.7 * (pop[idx[:, 1]] - pop[idx[:, 2]])
         cross = rng.random((n, d)) < 0.9
         cross[np.arange(n), rng.integers(0, d, n)] = True
         trial = np.where(cross, mutant, pop)
-        inside = np.all((trial >= lo) & (trial <= hi) & ((trial > 0.0) | ~log), axis=1)
+        inside = np.all((trial >= lo) & (trial <= hi), axis=1)
         tlp = np.full(n, -np.inf)
         if inside.any():
             tlp[inside] = log_prob(trial[inside])
