@@ -57,8 +57,8 @@ r"""The emcee driver: MAP from several starts, a small ball, sampling until conv
    longer error correlation against a larger error), which the affine-invariant moves follow
    in ``u`` and not in ``x``: on the run-up posterior the error parameters' ``tau`` fell from
    57-86 to 29-45 steps (session 7's measurement). And a region at the bottom of a wide
-   prior on ``[0, u]`` (a backlash of a few um on 0-300 um) is a sliver in ``x`` that walkers
-   on the plateau, whose differences are hundreds of um, hardly ever land in, while in ``u``
+   prior on ``[0, upper]`` (a backlash of a few um on 0-300 um) is a sliver in ``x`` that
+   walkers on the plateau, whose differences are hundreds of um, hardly ever land in; in ``u``
    it is as wide as the plateau (``tests/calibration/test_sampler.py``: half the mass there,
    none of it found in ``x``). ``tau`` and the convergence rule are
    computed in the coordinates the walkers move in; the returned chain, MAP and log posterior
