@@ -55,10 +55,14 @@ class HashingFile(io.FileIO):
     def _took(self, at: int, data: Any, n: int) -> None:
         if n > 0 and at <= self._hashed < at + n:
             with self._lock:
-                skip = self._hashed - at
-                if 0 <= skip < n:
-                    self._sha.update(memoryview(data)[skip:n])
-                    self._hashed = at + n
+                self._extend(at, data, n)
+
+    def _extend(self, at: int, data: Any, n: int) -> None:
+        """Hash the part of ``data[:n]`` (read at ``at``) past the hashed part (lock held)."""
+        skip = self._hashed - at
+        if 0 <= skip < n:
+            self._sha.update(memoryview(data)[skip:n])
+            self._hashed = at + n
 
     @property
     def hashed(self) -> int:
@@ -82,10 +86,7 @@ class HashingFile(io.FileIO):
                     return
                 self._sha.update(gap)
                 self._hashed += len(gap)
-            skip = self._hashed - at
-            if 0 <= skip < n:
-                self._sha.update(memoryview(data)[skip:])
-                self._hashed = at + n
+            self._extend(at, data, n)
 
     def readinto(self, b: Any) -> int | None:  # type: ignore[override]
         """Read into ``b`` (see :class:`io.FileIO`), hashing what extends the hashed part."""

@@ -29,7 +29,7 @@ from typing import Any, BinaryIO, Final
 from rigtools.errors import NoDataError
 from rigtools.ingest.builder import RecordingBuilder
 from rigtools.ingest.contract import ReadRequest
-from rigtools.ingest.files import open_source, sha256_of, source_sha256
+from rigtools.ingest.files import open_source, source_sha256
 from rigtools.ingest.layout import ChannelMapping, load_mapping
 from rigtools.ingest.recording import IngestReport, Provenance, Recording, RunMetadata
 
@@ -149,7 +149,8 @@ class StreamReader(ABC):
             decoded = self.decode(stream, str(path), builder, report, mapping, request)
             # CAN logs are read in order, MCAP at positions (its chunk worker too): either way
             # the bytes were hashed as they were read; this hashes only what was left unread
-            own_digest = source_sha256(stream) or sha256_of(path)
+            own_digest = source_sha256(stream)
+            assert own_digest is not None  # open_source's streams always hash their file
         meta = _merge_metadata(decoded.metadata, mapping, request.metadata, report)
         # Through JSON once, so the layout compares equal after a Parquet round trip.
         layout_desc = json.loads(json.dumps(decoded.layout))
