@@ -1,13 +1,17 @@
 """Benchmark: MCAP ingest against the mcap library's bare message iteration.
 
 Writes a 60 s, 4-channel, 25.6 kHz recording of protobuf ``rigtools.AccelBatch`` messages
-(1024 samples each, 1 MiB chunks), once with zstd and once with lz4 chunks, and prints for each:
+(1024 samples each, 1 MiB chunks), once with zstd and once with lz4 chunks, and the same
+samples as JSON ``rigtools.AccelBatch`` messages with zstd chunks, and prints for each:
 
 * ``read``: samples per second of ``rigtools.ingest.read`` (everything: SHA-256 of the file,
   container, decoding, the builder's float64 grid and validity mask, provenance);
 * ``mcap bare``: time of ``make_reader(f).iter_messages()`` with no decoding over the same file;
 * ``ratio`` = mcap bare / read (issue 21's goal >= 1.2: the full ingest faster than mcap's bare
   iteration);
+* for the JSON file, ``mcap + json.loads``: bare iteration with ``json.loads`` of every message
+  (what a user without rigtools writes), and ``json ratio`` = that / read (issue 21's goal
+  >= 2);
 * ``decompress only``: chunk decompression alone, the ceiling for any reader, and the distance
   to it (read time over decompression time);
 * a breakdown of ``read``: rigtools' container layer alone (``iter_messages``), ``ingest``
@@ -40,6 +44,8 @@ FS = 25_600.0
 REPEATS = 5
 #: Issue 21: read() of protobuf batches at least this many times faster than bare iteration.
 RATIO_GOAL = 1.2
+#: Issue 21: read() of JSON batches at least this many times faster than iteration + json.loads.
+JSON_RATIO_GOAL = 2.0
 
 
 def _best(fn: Callable[[], object], repeats: int = REPEATS) -> float:
@@ -51,7 +57,7 @@ def _best(fn: Callable[[], object], repeats: int = REPEATS) -> float:
     return best
 
 
-def write_recording(path: Path, compression: str) -> Path:
+def write_recording(path: Path, compression: str, encoding: str = "protobuf") -> Path:
     """The benchmark recording: 4 channels of float32 noise with a 50 Hz tone."""
     from rigtools.demo.mcap_writer import write_accel_mcap
 
@@ -63,7 +69,8 @@ def write_recording(path: Path, compression: str) -> Path:
                            .astype(np.float32), FS, "m/s^2", 0, 1_700_000_000.0)
         for i in range(N_CHANNELS)
     }
-    return write_accel_mcap(path, chans, compression=compression, batch=1024)
+    return write_accel_mcap(path, chans, compression=compression, batch=1024,
+                            encoding=encoding)  # type: ignore[arg-type]
 
 
 def _decompress_all(chunks: list[tuple[str, bytes, int]]) -> int:
@@ -82,8 +89,10 @@ def _decompress_all(chunks: list[tuple[str, bytes, int]]) -> int:
     return total
 
 
-def measure(path: Path) -> dict[str, float]:
+def measure(path: Path, encoding: str = "protobuf") -> dict[str, float]:
     """Times (s) and rates for one file."""
+    import json
+
     from mcap.reader import make_reader
     from mcap.records import Chunk
     from mcap.stream_reader import StreamReader
@@ -102,6 +111,11 @@ def measure(path: Path) -> dict[str, float]:
     def bare() -> int:
         with open(path, "rb") as f:
             return sum(1 for _ in make_reader(f).iter_messages())
+
+    def bare_json() -> int:
+        with open(path, "rb") as f:
+            return sum(len(json.loads(m.data)["values"])
+                       for _, _, m in make_reader(f).iter_messages())
 
     def container() -> int:
         with open(path, "rb") as f:
@@ -124,6 +138,8 @@ def measure(path: Path) -> dict[str, float]:
     fns = {"read_s": lambda: read(path), "mcap_bare_s": bare,
            "decompress_s": lambda: _decompress_all(chunks), "container_s": container,
            "ingest_s": ingest_only, "sha256_s": sha}
+    if encoding == "json":
+        fns["mcap_json_s"] = bare_json
     best = dict.fromkeys(fns, float("inf"))
     for _ in range(REPEATS):
         for key, fn in fns.items():
@@ -137,6 +153,8 @@ def measure(path: Path) -> dict[str, float]:
     }
     out["ratio"] = out["mcap_bare_s"] / out["read_s"]
     out["ratio_ingest"] = out["mcap_bare_s"] / out["ingest_s"]
+    if encoding == "json":
+        out["ratio_json"] = out["mcap_json_s"] / out["read_s"]
     return out
 
 
@@ -149,8 +167,13 @@ def report(name: str, m: dict[str, float]) -> str:
         f"  rigtools.ingest.read      {m['read_s'] * 1e3:8.1f} ms  "
         f"{m['samples'] / m['read_s'] / 1e6:7.1f} Msamples/s",
         f"  mcap bare iter_messages   {m['mcap_bare_s'] * 1e3:8.1f} ms",
-        f"  ratio mcap bare / read    {m['ratio']:8.2f}   (issue 21 goal >= {RATIO_GOAL:g}: "
-        f"{'met' if m['ratio'] >= RATIO_GOAL else 'NOT met'})",
+        f"  ratio mcap bare / read    {m['ratio']:8.2f}"
+        + (f"   (issue 21 goal >= {RATIO_GOAL:g}: "
+           f"{'met' if m['ratio'] >= RATIO_GOAL else 'NOT met'})" if "ratio_json" not in m else ""),
+        *([f"  mcap + json.loads        {m['mcap_json_s'] * 1e3:8.1f} ms",
+           f"  json ratio (that / read)  {m['ratio_json']:8.2f}   (issue 21 goal >= "
+           f"{JSON_RATIO_GOAL:g}: {'met' if m['ratio_json'] >= JSON_RATIO_GOAL else 'NOT met'})"]
+          if "ratio_json" in m else []),
         f"  read / decompress only    {m['read_s'] / m['decompress_s']:8.2f}   (distance to "
         "the ceiling; goal beyond issue 21: <= 2)",
         f"  decompress only (ceiling) {m['decompress_s'] * 1e3:8.1f} ms  "
@@ -168,10 +191,11 @@ def report(name: str, m: dict[str, float]) -> str:
 def run(directory: Path) -> dict[str, dict[str, float]]:
     """Write both files in ``directory``, measure and print."""
     results = {}
-    for comp in ("zstd", "lz4"):
-        p = write_recording(directory / f"bench_{comp}.mcap", comp)
-        results[comp] = measure(p)
-        print(report(comp, results[comp]), flush=True)
+    for name, comp, enc in (("zstd", "zstd", "protobuf"), ("lz4", "lz4", "protobuf"),
+                            ("json zstd", "zstd", "json")):
+        p = write_recording(directory / f"bench_{comp}_{enc}.mcap", comp, enc)
+        results[name] = measure(p, enc)
+        print(report(name, results[name]), flush=True)
     return results
 
 

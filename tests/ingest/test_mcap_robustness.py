@@ -17,6 +17,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from rigtools.demo.mcap_writer import write_accel_mcap, write_imu_mcap
 from rigtools.errors import MappingError, NoDataError, PayloadDecodeError
@@ -34,6 +36,7 @@ from rigtools.ingest.mcap.decoders import (
     decode_slow_value_json,
     encode_accel_batch_protobuf,
 )
+from rigtools.ingest.mcap.json import parse_json
 from rigtools.ingest.mcap.timing import (
     nominal_rate,
     resync_counter_restarts,
@@ -136,6 +139,62 @@ def _record_at(data: bytes, where: str) -> tuple[int, int]:
 def test_json_batch_beyond_float_or_too_deep_is_a_payload_error(payload):
     with pytest.raises(PayloadDecodeError, match=r"float range|nested too deeply"):
         decode_accel_batch_json(payload)
+
+
+def _same_json(fast, ref) -> bool:
+    """Whether ``parse_json``'s value ``fast`` is ``json.loads``' value ``ref``.
+
+    NaN equals NaN; an integer beyond the 64-bit range may be the float orjson gives for it
+    (``parse_json``'s documented exception) or, where orjson refused the document and the
+    standard library parsed it, the integer.
+    """
+    if isinstance(ref, bool) or ref is None or isinstance(ref, str):
+        return type(fast) is type(ref) and fast == ref
+    if isinstance(ref, int):
+        if -2**63 <= ref < 2**64:
+            return type(fast) is int and fast == ref
+        return ((type(fast) is float and fast == float(ref))  # orjson parsed the document
+                or (type(fast) is int and fast == ref))  # the standard library did
+    if isinstance(ref, float):
+        return type(fast) is float and (fast == ref or (fast != fast and ref != ref))
+    if isinstance(ref, list):
+        return (type(fast) is list and len(fast) == len(ref)
+                and all(_same_json(a, b) for a, b in zip(fast, ref, strict=True)))
+    return (type(fast) is dict and list(fast) == list(ref)
+            and all(_same_json(fast[k], ref[k]) for k in ref))
+
+
+_JSON_SCALARS = (st.none() | st.booleans() | st.text(max_size=8)
+                 | st.integers(min_value=-2**70, max_value=2**70)
+                 | st.floats(allow_nan=True, allow_infinity=True))
+_JSON_DOCS = st.recursive(_JSON_SCALARS, lambda kids: st.lists(kids, max_size=6)
+                          | st.dictionaries(st.text(max_size=6), kids, max_size=6),
+                          max_leaves=30)
+
+
+@settings(max_examples=300, deadline=None)
+@given(doc=_JSON_DOCS, cut=st.integers(min_value=0, max_value=400),
+       byte=st.integers(min_value=0, max_value=255), how=st.sampled_from(["keep", "cut", "flip"]))
+def test_parse_json_is_the_standard_parser_on_any_document(doc, cut, byte, how):
+    """The fast path (orjson) gives what the standard library gives, damaged or not.
+
+    The same value, or a :class:`PayloadDecodeError` where ``json.loads`` fails (issue 21:
+    the faster path must give what the slower one gives).
+    """
+    data = json.dumps(doc).encode()  # NaN and Infinity tokens and any integer size included
+    if how == "cut":
+        data = data[: cut % (len(data) + 1)]
+    elif how == "flip":
+        i = cut % len(data)
+        data = data[:i] + bytes([byte]) + data[i + 1:]
+    try:
+        ref = json.loads(data)
+    except (UnicodeDecodeError, ValueError, RecursionError):
+        with pytest.raises(PayloadDecodeError):
+            parse_json(data, "JSON")
+        return
+    assert _same_json(parse_json(data, "JSON"), ref)
+    assert _same_json(parse_json(memoryview(data), "JSON"), ref)
 
 
 def test_json_slow_value_beyond_float_is_a_payload_error():

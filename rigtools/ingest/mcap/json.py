@@ -6,6 +6,7 @@ import json
 from typing import Any, Final
 
 import numpy as np
+import orjson
 
 from rigtools.errors import PayloadDecodeError
 from rigtools.ingest.mcap.payloads import (
@@ -23,8 +24,20 @@ __all__ = ["decode_accel_batch_json", "decode_slow_value_json", "parse_json"]
 def parse_json(data: Any, expected: str) -> Any:
     """``data`` parsed as JSON; anything that does not parse is a :class:`PayloadDecodeError`.
 
-    A document nested deeper than the parser's recursion limit is refused the same way.
+    Parsed by orjson (RFC 8259), about ten times faster than the standard library on the
+    number arrays of an AccelBatch (issue 21: 63 against 641 us for 1024 values); a document
+    orjson refuses is parsed again by the standard library's :func:`json.loads`, whose
+    superset the schemas accept (NaN and Infinity tokens, numbers beyond the float range as
+    infinities, integers of any size, UTF-16/32 and a byte-order mark) and whose messages say
+    what is wrong. Both give the same values wherever both parse, except integers beyond the
+    64-bit range, which orjson gives as floats: a ``uint64`` field refuses them either way,
+    a number array holds them as floats either way. A document nested deeper than the
+    standard parser's recursion limit is refused the same way.
     """
+    try:
+        return orjson.loads(data)
+    except orjson.JSONDecodeError:
+        pass
     try:
         return json.loads(bytes(data))
     except (UnicodeDecodeError, ValueError) as exc:
