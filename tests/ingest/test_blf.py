@@ -483,6 +483,27 @@ def test_zip_bomb_container_is_bounded_and_reading_goes_on():
     assert report.first_position["oversized_container"] == "byte 144"
 
 
+def test_zlib_stream_ending_early_keeps_the_complete_objects_of_its_container():
+    """A deflate stream that stops short keeps the objects it inflated.
+
+    The container's size field agrees (the file is not cut): the container is counted
+    corrupt, with a warning, and every complete object before the break is kept in order.
+    """
+    objs = b"".join(_can(0x100, bytes([i]) * 8, ts=i) for i in range(40))
+    payload = zlib.compress(objs)[:-40]  # the last deflate blocks and the checksum missing
+    size = 32 + len(payload)
+    cut = (struct.pack("<4sHHLL", b"LOBJ", 16, 1, size, 10)
+           + struct.pack("<H6xL4x", 2, len(objs)) + payload + b"\x00" * (size % 4))
+    after = _container(b"".join(_can(0x200, b"\x02" * 8, ts=50 + i) for i in range(3)))
+    batch, report = read_blf(_header() + cut + after)
+    ids = batch.arbitration_id.tolist()
+    n_first = ids.count(0x100)
+    assert 0 < n_first < 40 and ids == [0x100] * n_first + [0x200] * 3
+    assert batch.data[:n_first, 0].tolist() == list(range(n_first))  # the first, in order
+    assert report.rejected["corrupt_container"] == 1
+    assert any("ends early" in w for w in report.warnings)
+
+
 def test_absurd_compressed_container_size_resynchronises_on_the_next_container():
     first = _container(b"".join(_can(0x100, b"\x01" * 8, ts=i) for i in range(5)))
     second = _container(b"".join(_can(0x200, b"\x02" * 8, ts=i) for i in range(7)))
