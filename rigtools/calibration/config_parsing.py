@@ -158,6 +158,12 @@ class BlockParser:
             raise self.error(key, f"{key} >= {minimum}", str(value))
         return int(value)
 
+    def boolean(self, key: str, value: Any) -> bool:
+        """``true`` or ``false``."""
+        if not isinstance(value, bool):
+            raise self.error(key, f"true or false for {key}", repr(value))
+        return value
+
     def walkers(self, key: str, value: Any) -> int:
         """An even number of walkers, at least 4."""
         w = self.integer(key, value, minimum=4)

@@ -172,7 +172,8 @@ def _fit_model(post: RunUpPosterior, config: CalibrationConfig, *, seed: int, in
     settings = SamplerSettings(
         walkers=walkers,
         max_steps=ru.max_steps if ru.max_steps is not None else config.max_steps,
-        check_every=config.check_every, seed=seed, map_starts=config.map_starts)
+        check_every=config.check_every, seed=seed, map_starts=config.map_starts,
+        delayed_acceptance=ru.delayed_acceptance)
     walkers = settings.n_walkers(post.ndim)
     if walkers < 2 * post.ndim:
         raise CalibrationError(f"{walkers} walkers for {post.ndim} free parameters; emcee "

@@ -14,6 +14,7 @@ the defaults)::
     steps_per_period = 64         # RK4 steps per mesh period of the model sweeps
     walkers = 16                  # default: [calibration] walkers if given, else 16
     max_steps = 20000             # default: [calibration] max_steps
+    delayed_acceptance = true     # screen proposals with a surrogate, sweep only those passing
 
     [calibration.runup.priors]    # the same prior tables as [calibration.priors]
     zeta = {dist = "lognormal", median = 0.03, sigma = 0.7}
@@ -151,6 +152,7 @@ _RUNUP_CHECKS: Final[dict[str, ValueCheck]] = {
     "steps_per_period": lambda p, k, v: p.integer(k, v, minimum=16),
     "walkers": BlockParser.walkers,
     "max_steps": lambda p, k, v: p.integer(k, v, minimum=1),
+    "delayed_acceptance": BlockParser.boolean,
 }
 _RUNUP_KEYS: Final = (*_RUNUP_CHECKS, "priors", "fixed")
 
@@ -175,6 +177,9 @@ class RunUpSettings:
         :data:`~rigtools.calibration.runup_api.RUNUP_WALKERS` (at least ``2 D + 2``).
     max_steps : int or None
         Largest number of sampler steps; None: the ``[calibration]`` setting.
+    delayed_acceptance : bool
+        Screen the sampler's proposals with a quadratic surrogate of the log posterior and
+        sweep only those that pass (:mod:`rigtools.calibration.delayed_acceptance`; exact).
     parameters : tuple of ParameterSpec
         In :data:`RUNUP_PARAMETERS` order (``gain`` always has its log-normal prior).
     """
@@ -185,6 +190,7 @@ class RunUpSettings:
     steps_per_period: int = 64
     walkers: int | None = None
     max_steps: int | None = None
+    delayed_acceptance: bool = True
     parameters: tuple[ParameterSpec, ...] = field(
         default_factory=lambda: default_parameter_specs(RUNUP_PARAMETERS))
 
@@ -206,6 +212,7 @@ class RunUpSettings:
             "steps_per_period": self.steps_per_period,
             "walkers": self.walkers,
             "max_steps": self.max_steps,
+            "delayed_acceptance": self.delayed_acceptance,
             **spec_tables(self.parameters),
         }
         return {k: v for k, v in d.items() if v is not None}

@@ -66,6 +66,15 @@ r"""The emcee driver: MAP from several starts, a small ball, sampling until conv
 6. **Burn-in and thinning** from the final ``tau``: discard ``2 max(tau)`` steps after the
    last move (at least), keep every ``max(1, min(tau) / 2)``-th. The mean acceptance
    fraction is reported and checked against the tolerances.
+7. **Delayed acceptance** (``SamplerSettings.delayed_acceptance``, optional): both moves
+   screen their proposals with a quadratic surrogate of the log posterior and evaluate it only
+   where the screen lets a proposal through, then accept with the second-stage probability
+   that keeps the chain exact (:mod:`rigtools.calibration.delayed_acceptance`). The
+   surrogate is the exact prior plus a quadratic fitted to the log likelihood of the second
+   half of the chain so far, refitted at every check from the first at which there are
+   enough distinct draws up to ``reset_until`` and fixed after that. For a log posterior that
+   costs a sweep per walker, a proposal then costs one with probability about the acceptance
+   fraction; the second-stage rejections lengthen ``tau``. Counted in ``screen_counts``.
 
 Reproducibility and resuming
 ----------------------------
@@ -94,6 +103,10 @@ from scipy.stats import chi2
 
 from rigtools.calibration.autocorr import integrated_time
 from rigtools.calibration.checkpoint import open_checkpoint
+from rigtools.calibration.delayed_acceptance import (
+    DelayedAcceptanceMove,
+    fit_quadratic_surrogate,
+)
 from rigtools.calibration.priors import Prior
 
 __all__ = [
@@ -153,6 +166,9 @@ class SamplerSettings:
     check_every : int
     seed : int
     map_starts : int
+    delayed_acceptance : bool
+        Screen the proposals with a quadratic surrogate of the log posterior, refitted to
+        the chain at every check up to :attr:`reset_until` (module notes, 7).
     """
 
     walkers: int | None = None
@@ -160,6 +176,7 @@ class SamplerSettings:
     check_every: int = 100
     seed: int = 1
     map_starts: int = 8
+    delayed_acceptance: bool = False
 
     @property
     def reset_until(self) -> int:
@@ -226,6 +243,9 @@ class SamplerRun:
         Parameter vectors evaluated while sampling.
     resets : tuple of int
         Steps at which stranded walkers were moved (the last one ends the burn-in at least).
+    screen_counts : tuple of int
+        With delayed acceptance: proposals screened, passed the screen (each one full
+        evaluation) and accepted, in this process (a resumed run counts from the resume).
     """
 
     chain: np.ndarray
@@ -243,6 +263,7 @@ class SamplerRun:
     seconds_sampling: float = 0.0
     log_prob_evaluations: int = 0
     resets: tuple[int, ...] = ()
+    screen_counts: tuple[int, int, int] = (0, 0, 0)
 
     def samples(self) -> np.ndarray:
         """Kept draws, ``(W, draws, D)`` (burn-in discarded, thinned)."""
@@ -375,8 +396,37 @@ class _Space:
         return in_sampling
 
 
-def _moves() -> list[tuple[Any, float]]:
-    return [(emcee.moves.DEMove(), 0.5), (emcee.moves.StretchMove(), 0.5)]
+def _moves(delayed: bool = False) -> list[tuple[Any, float]]:
+    inner = [emcee.moves.DEMove(), emcee.moves.StretchMove()]
+    moves = [DelayedAcceptanceMove(m) for m in inner] if delayed else inner
+    return [(moves[0], 0.5), (moves[1], 0.5)]
+
+
+def _screen(moves: list[tuple[Any, float]], chain: np.ndarray, lp: np.ndarray, t: int,
+            space: _Space, priors: tuple[Prior, ...]) -> float | None:
+    """Fit the delayed-acceptance surrogate to steps ``[t // 2, t)``; its rms (None: too few).
+
+    A pure function of the chain's first ``t`` steps, so a resumed run refits the surrogate
+    the uninterrupted one used.
+    """
+    lower = space.to_sampling(np.array([p.lower for p in priors]))
+    upper = space.to_sampling(np.array([p.upper for p in priors]))
+
+    def log_prior(u: np.ndarray) -> np.ndarray:
+        x = space.to_natural(u)
+        out = space.log_jacobian(u)
+        for i, p in enumerate(priors):
+            out = out + p.logpdf(x[:, i])
+        return np.asarray(out, dtype=float)
+
+    ndim = chain.shape[-1]
+    part, part_lp = chain[t // 2 : t], lp[t // 2 : t]
+    surrogate = fit_quadratic_surrogate(part.reshape(-1, ndim), part_lp.reshape(-1),
+                                        log_prior, lower, upper,
+                                        drop_below=0.5 * float(chi2.ppf(1 - 1e-5, ndim)))
+    for m, _ in moves:
+        m.surrogate = surrogate
+    return None if surrogate is None else surrogate.rms
 
 
 def run_sampler(
@@ -430,6 +480,9 @@ def run_sampler(
             raise ValueError(f"log_scale for a prior that reaches below 0: {p.describe()}")
     if space.log.any():
         fingerprint = f"{fingerprint}|log:{''.join('1' if v else '0' for v in space.log)}"
+    if settings.delayed_acceptance:
+        fingerprint = f"{fingerprint}|delayed-acceptance"
+    moves = _moves(settings.delayed_acceptance)
     map_est = (find_map(log_prob, priors, starts=settings.map_starts, seed=settings.seed)
                if map_estimate is None else map_estimate)
     n_evals = [0]
@@ -448,7 +501,7 @@ def run_sampler(
         if note:
             notes.append(note)
         sampler = emcee.EnsembleSampler(walkers, ndim, counted, vectorize=True,
-                                        moves=_moves(), backend=backend)
+                                        moves=moves, backend=backend)
         if resumed:
             data = backend.checkpoint_data()
             resets = [int(i) for i in data.get("resets", [])]
@@ -464,7 +517,7 @@ def run_sampler(
                                                  settings.seed))
     else:
         backend = None
-        sampler = emcee.EnsembleSampler(walkers, ndim, counted, vectorize=True, moves=_moves())
+        sampler = emcee.EnsembleSampler(walkers, ndim, counted, vectorize=True, moves=moves)
         sampler.random_state = np.random.RandomState(settings.seed).get_state()
         state = space.to_sampling(start_ball(map_est.theta, priors, walkers, settings.seed))
     iteration = resumed
@@ -479,6 +532,10 @@ def run_sampler(
                                      iteration=resumed)
     start = resets[-1] if resets else 0
     converged = is_converged(history)
+    screen_fits: list[tuple[int, float | None]] = []
+    if settings.delayed_acceptance and resumed:
+        t_fit = min(resumed, settings.reset_until // settings.check_every * settings.check_every)
+        screen_fits.append((t_fit, _screen(moves, chain, lp, t_fit, space, priors)))
     t0 = time.perf_counter()
     while not converged and iteration < settings.max_steps:
         n = min(settings.check_every - iteration % settings.check_every,
@@ -503,6 +560,8 @@ def run_sampler(
             if moved:
                 resets.append(iteration)
                 history, start = [], iteration
+        if settings.delayed_acceptance and iteration <= settings.reset_until:
+            screen_fits.append((iteration, _screen(moves, chain, lp, iteration, space, priors)))
         if backend is not None:
             backend.commit({"tau_history": [[i, list(t), w] for i, t, w in history],
                             "resets": resets})
@@ -528,6 +587,17 @@ def run_sampler(
                      f"{CONVERGENCE_FACTOR:g} needed, and max tau stable to "
                      f"{100 * TAU_RTOL:g} % over the last {100 * (1 - TAU_BASELINE):g} % of the "
                      "chain)")
+    counts = (0, 0, 0)
+    if settings.delayed_acceptance:
+        total = np.sum([m.counts for m, _ in moves], axis=0)
+        counts = (int(total[0]), int(total[1]), int(total[2]))
+        fitted = [(t, r) for t, r in screen_fits if r is not None]
+        if fitted and counts[0]:
+            notes.append(
+                f"delayed acceptance: surrogate refitted at the checks to step {fitted[-1][0]} "
+                f"(last rms {fitted[-1][1]:.3g} in log posterior); {counts[0]} proposals "
+                f"screened, {100 * counts[1] / counts[0]:.1f} % passed (one full evaluation "
+                f"each), {100 * counts[2] / max(counts[1], 1):.1f} % of those accepted")
     burn = max(math.ceil(2.0 * np.max(tau)) + start, warm)
     burn = min(burn, chain.shape[0] - 1)
     thin = max(1, int(0.5 * np.min(tau)))
@@ -540,7 +610,7 @@ def run_sampler(
         tau_history=tuple(history), converged=converged, n_steps=int(chain.shape[0]),
         burn_in=burn, thin=thin, map_estimate=map_est, resumed_from=resumed,
         notes=tuple(notes), seconds_sampling=seconds, log_prob_evaluations=n_evals[0],
-        resets=tuple(resets),
+        resets=tuple(resets), screen_counts=counts,
     )
 
 

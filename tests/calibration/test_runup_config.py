@@ -28,6 +28,7 @@ min_span = 1.5
 steps_per_period = 48
 walkers = 24
 max_steps = 9000
+delayed_acceptance = false
 
 [calibration.runup.priors]
 zeta = {dist = "lognormal", median = 0.02, sigma = 0.5}
@@ -70,7 +71,8 @@ def test_a_full_block_is_resolved_and_round_trips(
     assert cfg.models == ("fvms", "vvms", "lste")
     ru = cfg.runup
     assert (ru.max_speed_points, ru.min_speed_points, ru.min_span, ru.steps_per_period,
-            ru.walkers, ru.max_steps) == (80, 25, 1.5, 48, 24, 9000)
+            ru.walkers, ru.max_steps, ru.delayed_acceptance) == (80, 25, 1.5, 48, 24, 9000,
+                                                                 False)
     assert ru.free_parameters == ("zeta", "mesh_stiffness_scale", "fluctuation_scale",
                                   "model_error", "channel_error")
     assert ru.parameter("backlash").fixed == 136.0
@@ -100,6 +102,8 @@ def test_the_schema_accepts_the_full_block_and_rejects_unknown_keys(
     ("[calibration.runup]\nmax_speed_points = 30\nmin_speed_points = 40\n", 12,
      r"min_speed_points <= max_speed_points, found 40 > 30"),
     ("[calibration.runup]\nsteps_per_period = 8\n", 11, r"steps_per_period >= 16"),
+    ("[calibration.runup]\ndelayed_acceptance = 1\n", 11,
+     r"true or false for calibration.runup.delayed_acceptance, found 1"),
     ("[calibration.runup.priors]\nzeeta = {dist = \"uniform\", lower = 0.0, upper = 1.0}\n",
      11, r"a parameter name in \[calibration.runup.priors\].*unknown 'zeeta' \(did you mean "
      r"'zeta'\?\)"),
