@@ -24,7 +24,11 @@ Steps (issue 20):
    differential evolution (:func:`~rigtools.calibration.runup_map.find_runup_map`) and emcee
    to the autocorrelation rule with :func:`~rigtools.calibration.sampler.run_sampler`, the
    positive parameters moved in log coordinates
-   (:attr:`~rigtools.calibration.runup_model.RunUpPosterior.log_scale`), resumable from
+   (:attr:`~rigtools.calibration.runup_model.RunUpPosterior.log_scale`), the proposals
+   screened by a surrogate (delayed acceptance) and a fifth of the steps independence
+   proposals from a mixture fitted to the chain, both exact and both switchable in
+   ``[calibration.runup]`` (module notes 7 and 8 of :mod:`~rigtools.calibration.sampler`),
+   resumable from
    ``<outdir>/runup/chains.h5`` (group ``runup-<model>``); :data:`RUNUP_WALKERS` walkers
    unless configured.
 3. From at most :data:`~rigtools.calibration.runup_outputs.MAX_STORED_DRAWS` posterior draws:
@@ -173,7 +177,7 @@ def _fit_model(post: RunUpPosterior, config: CalibrationConfig, *, seed: int, in
         walkers=walkers,
         max_steps=ru.max_steps if ru.max_steps is not None else config.max_steps,
         check_every=config.check_every, seed=seed, map_starts=config.map_starts,
-        delayed_acceptance=ru.delayed_acceptance)
+        delayed_acceptance=ru.delayed_acceptance, mixture_move=ru.mixture_move)
     walkers = settings.n_walkers(post.ndim)
     if walkers < 2 * post.ndim:
         raise CalibrationError(f"{walkers} walkers for {post.ndim} free parameters; emcee "

@@ -15,6 +15,7 @@ the defaults)::
     walkers = 16                  # default: [calibration] walkers if given, else 16
     max_steps = 20000             # default: [calibration] max_steps
     delayed_acceptance = true     # screen proposals with a surrogate, sweep only those passing
+    mixture_move = true           # a fifth of the steps: independence proposals from a mixture
 
     [calibration.runup.priors]    # the same prior tables as [calibration.priors]
     zeta = {dist = "lognormal", median = 0.03, sigma = 0.7}
@@ -153,6 +154,7 @@ _RUNUP_CHECKS: Final[dict[str, ValueCheck]] = {
     "walkers": BlockParser.walkers,
     "max_steps": lambda p, k, v: p.integer(k, v, minimum=1),
     "delayed_acceptance": BlockParser.boolean,
+    "mixture_move": BlockParser.boolean,
 }
 _RUNUP_KEYS: Final = (*_RUNUP_CHECKS, "priors", "fixed")
 
@@ -180,6 +182,10 @@ class RunUpSettings:
     delayed_acceptance : bool
         Screen the sampler's proposals with a quadratic surrogate of the log posterior and
         sweep only those that pass (:mod:`rigtools.calibration.delayed_acceptance`; exact).
+    mixture_move : bool
+        A fifth of the sampler's steps are independence Metropolis-Hastings proposals from a
+        Student-t mixture fitted to the chain (:mod:`rigtools.calibration.mixture_move`;
+        exact): fewer steps per independent draw, and crossings between regimes.
     parameters : tuple of ParameterSpec
         In :data:`RUNUP_PARAMETERS` order (``gain`` always has its log-normal prior).
     """
@@ -191,6 +197,7 @@ class RunUpSettings:
     walkers: int | None = None
     max_steps: int | None = None
     delayed_acceptance: bool = True
+    mixture_move: bool = True
     parameters: tuple[ParameterSpec, ...] = field(
         default_factory=lambda: default_parameter_specs(RUNUP_PARAMETERS))
 
@@ -213,6 +220,7 @@ class RunUpSettings:
             "walkers": self.walkers,
             "max_steps": self.max_steps,
             "delayed_acceptance": self.delayed_acceptance,
+            "mixture_move": self.mixture_move,
             **spec_tables(self.parameters),
         }
         return {k: v for k, v in d.items() if v is not None}

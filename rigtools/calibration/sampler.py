@@ -75,6 +75,14 @@ r"""The emcee driver: MAP from several starts, a small ball, sampling until conv
    enough distinct draws up to ``reset_until`` and fixed after that. For a log posterior that
    costs a sweep per walker, a proposal then costs one with probability about the acceptance
    fraction; the second-stage rejections lengthen ``tau``. Counted in ``screen_counts``.
+8. **Mixture move** (``SamplerSettings.mixture_move``, optional): a fifth of the steps
+   (:data:`MIXTURE_SHARE`) are independence Metropolis-Hastings steps from a Student-t
+   mixture fitted to the second half of the chain so far, refitted as the surrogate of 7
+   (:mod:`rigtools.calibration.mixture_move`; a stretch move until the first fit). Every
+   walker proposes a fresh draw: on a near-Gaussian posterior most are accepted and the
+   draws decorrelate in a few steps instead of tens, and a walker jumps between two regimes
+   of a posterior the mixture holds as two components, which the ensemble moves cross only
+   rarely. Exact for any fitted mixture (the Metropolis-Hastings ratio carries ``g``).
 
 Reproducibility and resuming
 ----------------------------
@@ -107,6 +115,7 @@ from rigtools.calibration.delayed_acceptance import (
     DelayedAcceptanceMove,
     fit_quadratic_surrogate,
 )
+from rigtools.calibration.mixture_move import MixtureIndependenceMove, fit_mixture_proposal
 from rigtools.calibration.priors import Prior
 
 __all__ = [
@@ -169,6 +178,9 @@ class SamplerSettings:
     delayed_acceptance : bool
         Screen the proposals with a quadratic surrogate of the log posterior, refitted to
         the chain at every check up to :attr:`reset_until` (module notes, 7).
+    mixture_move : bool
+        Add independence Metropolis-Hastings steps from a Student-t mixture fitted to the
+        chain, refitted likewise (module notes, 8).
     """
 
     walkers: int | None = None
@@ -177,6 +189,7 @@ class SamplerSettings:
     seed: int = 1
     map_starts: int = 8
     delayed_acceptance: bool = False
+    mixture_move: bool = False
 
     @property
     def reset_until(self) -> int:
@@ -396,19 +409,35 @@ class _Space:
         return in_sampling
 
 
-def _moves(delayed: bool = False) -> list[tuple[Any, float]]:
+#: Share of the steps that are independence steps with ``mixture_move`` (module notes, 8).
+MIXTURE_SHARE: Final = 0.2
+
+
+def _moves(delayed: bool = False, mixture: bool = False) -> list[tuple[Any, float]]:
     inner = [emcee.moves.DEMove(), emcee.moves.StretchMove()]
-    moves = [DelayedAcceptanceMove(m) for m in inner] if delayed else inner
-    return [(moves[0], 0.5), (moves[1], 0.5)]
+    moves: list[Any] = [DelayedAcceptanceMove(m) for m in inner] if delayed else inner
+    if not mixture:
+        return [(moves[0], 0.5), (moves[1], 0.5)]
+    rest = 0.5 * (1.0 - MIXTURE_SHARE)
+    return [(moves[0], rest), (moves[1], rest), (MixtureIndependenceMove(), MIXTURE_SHARE)]
 
 
-def _screen(moves: list[tuple[Any, float]], chain: np.ndarray, lp: np.ndarray, t: int,
-            space: _Space, priors: tuple[Prior, ...]) -> float | None:
-    """Fit the delayed-acceptance surrogate to steps ``[t // 2, t)``; its rms (None: too few).
+def _adapt(moves: list[tuple[Any, float]], chain: np.ndarray, lp: np.ndarray, t: int,
+           space: _Space, priors: tuple[Prior, ...], seed: int) -> float | None:
+    """Refit the screen and the mixture (where the moves have them) to steps ``[t // 2, t)``.
 
-    A pure function of the chain's first ``t`` steps, so a resumed run refits the surrogate
-    the uninterrupted one used.
+    Returns the surrogate's rms (None: no surrogate). A pure function of the chain's first
+    ``t`` steps, so a resumed run refits what the uninterrupted one used.
     """
+    ndim = chain.shape[-1]
+    mixture = [m for m, _ in moves if isinstance(m, MixtureIndependenceMove)]
+    if mixture:
+        g = fit_mixture_proposal(chain[t // 2 : t].reshape(-1, ndim), seed=seed)
+        for m in mixture:
+            m.proposal = g
+    screened = [m for m, _ in moves if isinstance(m, DelayedAcceptanceMove)]
+    if not screened:
+        return None
     lower = space.to_sampling(np.array([p.lower for p in priors]))
     upper = space.to_sampling(np.array([p.upper for p in priors]))
 
@@ -419,12 +448,11 @@ def _screen(moves: list[tuple[Any, float]], chain: np.ndarray, lp: np.ndarray, t
             out = out + p.logpdf(x[:, i])
         return np.asarray(out, dtype=float)
 
-    ndim = chain.shape[-1]
     part, part_lp = chain[t // 2 : t], lp[t // 2 : t]
     surrogate = fit_quadratic_surrogate(part.reshape(-1, ndim), part_lp.reshape(-1),
                                         log_prior, lower, upper,
                                         drop_below=0.5 * float(chi2.ppf(1 - 1e-5, ndim)))
-    for m, _ in moves:
+    for m in screened:
         m.surrogate = surrogate
     return None if surrogate is None else surrogate.rms
 
@@ -482,7 +510,10 @@ def run_sampler(
         fingerprint = f"{fingerprint}|log:{''.join('1' if v else '0' for v in space.log)}"
     if settings.delayed_acceptance:
         fingerprint = f"{fingerprint}|delayed-acceptance"
-    moves = _moves(settings.delayed_acceptance)
+    if settings.mixture_move:
+        fingerprint = f"{fingerprint}|mixture-move"
+    moves = _moves(settings.delayed_acceptance, settings.mixture_move)
+    adaptive = settings.delayed_acceptance or settings.mixture_move
     map_est = (find_map(log_prob, priors, starts=settings.map_starts, seed=settings.seed)
                if map_estimate is None else map_estimate)
     n_evals = [0]
@@ -533,9 +564,10 @@ def run_sampler(
     start = resets[-1] if resets else 0
     converged = is_converged(history)
     screen_fits: list[tuple[int, float | None]] = []
-    if settings.delayed_acceptance and resumed:
+    if adaptive and resumed:
         t_fit = min(resumed, settings.reset_until // settings.check_every * settings.check_every)
-        screen_fits.append((t_fit, _screen(moves, chain, lp, t_fit, space, priors)))
+        screen_fits.append((t_fit, _adapt(moves, chain, lp, t_fit, space, priors,
+                                          settings.seed)))
     t0 = time.perf_counter()
     while not converged and iteration < settings.max_steps:
         n = min(settings.check_every - iteration % settings.check_every,
@@ -560,8 +592,9 @@ def run_sampler(
             if moved:
                 resets.append(iteration)
                 history, start = [], iteration
-        if settings.delayed_acceptance and iteration <= settings.reset_until:
-            screen_fits.append((iteration, _screen(moves, chain, lp, iteration, space, priors)))
+        if adaptive and iteration <= settings.reset_until:
+            screen_fits.append((iteration, _adapt(moves, chain, lp, iteration, space, priors,
+                                                  settings.seed)))
         if backend is not None:
             backend.commit({"tau_history": [[i, list(t), w] for i, t, w in history],
                             "resets": resets})
@@ -587,9 +620,17 @@ def run_sampler(
                      f"{CONVERGENCE_FACTOR:g} needed, and max tau stable to "
                      f"{100 * TAU_RTOL:g} % over the last {100 * (1 - TAU_BASELINE):g} % of the "
                      "chain)")
+    for m, _ in moves:
+        if isinstance(m, MixtureIndependenceMove) and m.counts[0]:
+            g = m.proposal
+            notes.append(f"mixture move: {m.counts[0]} independence proposals from a "
+                         f"{0 if g is None else g.weights.size}-component Student-t mixture "
+                         f"fitted to the chain, {100 * m.counts[1] / m.counts[0]:.1f} % "
+                         "accepted")
     counts = (0, 0, 0)
     if settings.delayed_acceptance:
-        total = np.sum([m.counts for m, _ in moves], axis=0)
+        total = np.sum([m.counts for m, _ in moves if isinstance(m, DelayedAcceptanceMove)],
+                       axis=0)
         counts = (int(total[0]), int(total[1]), int(total[2]))
         fitted = [(t, r) for t, r in screen_fits if r is not None]
         if fitted and counts[0]:

@@ -29,6 +29,7 @@ steps_per_period = 48
 walkers = 24
 max_steps = 9000
 delayed_acceptance = false
+mixture_move = false
 
 [calibration.runup.priors]
 zeta = {dist = "lognormal", median = 0.02, sigma = 0.5}
@@ -71,8 +72,8 @@ def test_a_full_block_is_resolved_and_round_trips(
     assert cfg.models == ("fvms", "vvms", "lste")
     ru = cfg.runup
     assert (ru.max_speed_points, ru.min_speed_points, ru.min_span, ru.steps_per_period,
-            ru.walkers, ru.max_steps, ru.delayed_acceptance) == (80, 25, 1.5, 48, 24, 9000,
-                                                                 False)
+            ru.walkers, ru.max_steps, ru.delayed_acceptance, ru.mixture_move) == (
+                80, 25, 1.5, 48, 24, 9000, False, False)
     assert ru.free_parameters == ("zeta", "mesh_stiffness_scale", "fluctuation_scale",
                                   "model_error", "channel_error")
     assert ru.parameter("backlash").fixed == 136.0
