@@ -5,16 +5,19 @@ convergence (the autocorrelation rule of :mod:`rigtools.calibration.sampler`) in
 minutes on 2 cores, all three models under 30 minutes. On the run-up of a ``rigtools demo``
 output folder, with ``max_speed_points`` windows per direction and the campaign's other
 ``[calibration]`` settings, this script runs :func:`rigtools.calibration.calibrate_runups`
-for the chosen models, with delayed acceptance (``[calibration.runup] delayed_acceptance``,
-the default: a quadratic surrogate screens the proposals, only those passing cost a sweep)
-and, in the same run, without it (every proposal swept: the plain sampler), and prints per
+for the chosen models with the default sampler (``screened``: delayed acceptance, a
+quadratic surrogate screening the proposals so that only those passing cost a sweep, and the
+mixture move, a fifth of the steps independence proposals from a mixture fitted to the chain;
+``[calibration.runup] delayed_acceptance`` and ``mixture_move``) and, in the same run, with
+both off (``plain``: every proposal of the stretch and DE moves swept), and prints per
 model and variant the wall time from its start to the next model's (MAP, sampling and
 summaries), the steps, whether the rule was met, the final ``tau``, the largest split-walker
 R-hat and the sweeps per step; then per model the speed-up of the screened run, its
-surrogate's fit and screen figures, and what the screen costs in accuracy: delayed acceptance
-is exact (the second stage accepts by the full sweep), so the two posteriors differ by Monte
-Carlo error only, printed as the largest difference of a parameter's mean between them in
-units of its posterior sd; the total against the goals closes the table.
+surrogate's fit and screen figures, and what the choice costs in accuracy: both moves are
+exact (the second stage accepts by the full sweep; the independence step by the
+Metropolis-Hastings ratio), so the two posteriors differ by Monte Carlo error only, printed as
+the largest difference of a parameter's mean between them in units of its posterior sd; the
+total against the goals closes the table.
 
 It needs a demo output (``rigtools demo -o DIR``, 7-20 minutes by the machine; its
 observations table is read from ``DIR/results/observations.parquet``): the calibrations take
@@ -48,7 +51,7 @@ def calibrate(demo_out: Path, models: tuple[str, ...], args: argparse.Namespace,
     cfg = campaign_config(camp)
     cfg = dataclasses.replace(cfg, models=models, runup=dataclasses.replace(
         cfg.runup, max_steps=args.max_steps, max_speed_points=args.points,
-        walkers=args.walkers, delayed_acceptance=screened))
+        walkers=args.walkers, delayed_acceptance=screened, mixture_move=screened))
     obs = pd.read_parquet(demo_out / "results" / "observations.parquet")
     t0 = time.perf_counter()
     last: dict[int, float] = {}  # model index -> its last progress report (its chain's end)
@@ -88,7 +91,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-steps", type=int, default=8000)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--variants", default="screened,plain",
-                    help="screened (delayed acceptance), plain (every proposal swept), or both")
+                    help="screened (the default sampler), plain (stretch and DE, every "
+                    "proposal swept), or both")
     args = ap.parse_args(argv)
     for p in (args.demo_out / "campaign" / "campaign.toml",
               args.demo_out / "results" / "observations.parquet"):
