@@ -38,12 +38,15 @@ BACKSIDE_PROBABILITY: Final = 0.05
 NO_BACKSIDE_STATEMENT: Final = ("no back-side contact in any posterior draw: the run-up does "
                                 "not identify the backlash")
 _PRIOR_DRAWS: Final = 20000
+#: Notes of :func:`~rigtools.calibration.sampler.run_sampler` that are not warnings.
+_SAMPLER_NOTES: Final = ("walkers stranded", "delayed acceptance:", "mixture move:")
 
 
 def _fit_warnings(names: tuple[str, ...], run: SamplerRun, summaries: Mapping[str, Any],
                   tolerances: Tolerances) -> list[str]:
     """Convergence, R-hat, ESS and acceptance (as the natural-frequency calibration)."""
-    notes = [n for n in run.notes if not n.startswith("walkers stranded")]
+    # the sampler's account of itself, in summary.json's notes, not a warning
+    notes = [n for n in run.notes if not n.startswith(_SAMPLER_NOTES)]
     return notes + sampler_warnings(names, run, summaries, tolerances)
 
 
