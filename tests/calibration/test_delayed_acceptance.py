@@ -72,7 +72,7 @@ def _sample(surrogate: object, steps: int, seed: int, walkers: int = 32
     return sampler.get_chain(discard=steps // 10), moves, evaluations[0]
 
 
-def _z_scores(chain: np.ndarray) -> dict[str, float]:
+def z_scores(chain: np.ndarray) -> dict[str, float]:
     """Standardised errors of the mean, variance and quantiles of each coordinate."""
     tau = integrated_time(chain)
     flat = chain.reshape(-1, chain.shape[-1])
@@ -107,7 +107,7 @@ def test_a_wrong_surrogate_still_samples_the_exact_target(surrogate_kind: str) -
             d = (np.atleast_2d(u) - centre) / width
             return flat_prior(u) - 0.5 * np.sum(d * d, axis=1)
     chain, moves, _ = _sample(surrogate, 6000, seed=11)
-    z = _z_scores(chain)
+    z = z_scores(chain)
     assert max(abs(v) for v in z.values()) < Z_LIMIT, z
     proposals, screened, accepted = sum(m.counts for m in moves)
     assert proposals == 6000 * 32 and accepted <= screened <= proposals
@@ -132,7 +132,7 @@ def test_without_a_screen_the_second_stage_would_bias_the_chain() -> None:
     rng = np.random.default_rng(11)
     sampler.run_mcmc(np.c_[rng.gamma(K_GAMMA, size=32), rng.standard_normal((32, 2))], 3000,
                      skip_initial_state_check=True)
-    z = _z_scores(sampler.get_chain(discard=300))
+    z = z_scores(sampler.get_chain(discard=300))
     assert max(abs(v) for v in z.values()) > 10 * Z_LIMIT
 
 
@@ -143,7 +143,7 @@ def test_the_exact_target_as_screen_accepts_every_screened_proposal_and_saves_ev
     assert accepted == screened                      # alpha_2 = 1 when s = p
     # only screened proposals cost (and the start, which emcee evaluates once)
     assert evaluations - 32 == screened < 0.7 * proposals
-    assert max(abs(v) for v in _z_scores(chain).values()) < Z_LIMIT
+    assert max(abs(v) for v in z_scores(chain).values()) < Z_LIMIT
 
 
 def test_with_no_surrogate_it_is_the_wrapped_move_draw_for_draw() -> None:

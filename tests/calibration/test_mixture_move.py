@@ -14,7 +14,7 @@ import emcee
 import numpy as np
 import pytest
 from scipy import stats
-from test_delayed_acceptance import K_GAMMA, Z_LIMIT, _z_scores, target
+from test_delayed_acceptance import K_GAMMA, Z_LIMIT, target, z_scores
 
 from rigtools.calibration.autocorr import integrated_time
 from rigtools.calibration.mixture_move import (
@@ -68,7 +68,7 @@ def test_independence_steps_sample_the_exact_target(kind: str) -> None:
     rng = np.random.default_rng(7)
     sampler.run_mcmc(np.c_[rng.gamma(K_GAMMA, size=32), rng.standard_normal((32, 2))], 5000,
                      skip_initial_state_check=True)
-    z = _z_scores(sampler.get_chain(discard=500))
+    z = z_scores(sampler.get_chain(discard=500))
     assert max(abs(v) for v in z.values()) < Z_LIMIT, z
     assert move.counts[0] > 0 and 0 < move.counts[1] <= move.counts[0]
 
