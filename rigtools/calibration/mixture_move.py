@@ -52,7 +52,7 @@ INFLATION: Final = 1.2
 MIN_WEIGHT_SHARE: Final = 0.1
 #: Draws per parameter of each component needed before a mixture is fitted.
 MIN_DRAWS_PER_DIM: Final = 20
-#: Distinct draws the mixture is fitted to at most (the latest).
+#: Draws the mixture is fitted to at most (the latest; repeats then count once).
 MAX_FIT_DRAWS: Final = 20000
 
 
@@ -118,7 +118,8 @@ def fit_mixture_proposal(points: np.ndarray, *, seed: int = 0) -> MixtureProposa
     from sklearn.mixture import GaussianMixture
 
     pts = np.asarray(points, dtype=float)
-    pts = np.unique(pts[np.all(np.isfinite(pts), axis=1)], axis=0)[-MAX_FIT_DRAWS:]
+    # the latest draws (np.unique sorts its rows: cut before it, not after)
+    pts = np.unique(pts[np.all(np.isfinite(pts), axis=1)][-MAX_FIT_DRAWS:], axis=0)
     n, d = pts.shape
     if n < MIN_DRAWS_PER_DIM * d:
         return None
