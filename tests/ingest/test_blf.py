@@ -472,6 +472,21 @@ def test_container_claiming_an_absurd_size_is_not_allocated():
     assert any("claims 4294967280 uncompressed bytes" in w for w in report.warnings)
 
 
+@pytest.mark.parametrize("error", [-1, -24, +1, +5000])
+def test_a_container_claiming_the_wrong_uncompressed_size_is_read_whole(error):
+    """The one-call inflate (libdeflate) needs the claimed size; a wrong claim falls back.
+
+    A claim a few bytes short fails libdeflate, the streaming zlib path reads the container
+    whole; a claim too large is only a buffer bound: python-can ignores the claim either way.
+    """
+    stream = b"".join(_can(0x100, bytes([i]) * 8, ts=i) for i in range(60))
+    body = (_container(stream[:1200], claimed=1200 + error) + _container(stream[1200:]))
+    raw = _header(144 + len(body)) + body
+    batch, report = read_blf(raw)
+    assert len(batch) == 60 and report.n_rejected == 0 and not report.warnings
+    assert_same_frames(batch, data_frames(pycan_messages(raw)))
+
+
 def test_zip_bomb_container_is_bounded_and_reading_goes_on():
     bomb = _container(b"\x00" * (8 << 20))  # inflates to 8 MiB
     good = _container(b"".join(_can(0x100, bytes([i]) * 8, ts=i) for i in range(10)))

@@ -68,6 +68,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import BinaryIO, Final
 
+import deflate
+
 from rigtools.errors import RecordingFormatError
 from rigtools.ingest.can.blf_objects import (
     LOBJ,
@@ -275,6 +277,22 @@ def _swallowed_header(src: _Source, body: bytes, pad: bytes) -> int:
     return -1
 
 
+def _inflate_whole(payload: memoryview, claimed: int, bound: int) -> bytes | None:
+    """A sound container's zlib stream inflated in one call of libdeflate, or None.
+
+    libdeflate inflates 2-3x faster than zlib's streaming decompressor, but needs the output
+    size up front: the container's claimed size, when it is within ``bound``. Any stream
+    libdeflate refuses (damaged, cut short, a wrong claim, a bad Adler-32) returns None, and
+    the caller's zlib path decides what was wrong and keeps what it can, as before.
+    """
+    if not 0 < claimed <= bound:
+        return None
+    try:
+        return deflate.zlib_decompress(payload, claimed)
+    except deflate.DeflateError:
+        return None
+
+
 def iter_batches(
     stream: BinaryIO,
     path: str,
@@ -389,6 +407,8 @@ def iter_batches(
                         f"bytes; decompression bounded to {max_container_bytes}")
         if method == 0:
             data = bytes(payload)
+        elif method == 2 and (data := _inflate_whole(payload, claimed, max_container_bytes)):
+            pass
         elif method == 2:
             z = zlib.decompressobj()
             try:
