@@ -91,16 +91,19 @@ def test_byte_aligned_signals_read_as_their_bytes(byte_order: str, signed: bool,
     values and their dtype are those of the general shift-and-mask path.
     """
     rng = np.random.default_rng(length)
-    data = rng.integers(0, 256, (64, 8), dtype=np.uint8)
-    data[0] = 0xFF  # all ones: the most negative and the largest values
-    data[1] = 0x80
     nb = length // 8
-    for first in range(0, 9 - nb):
-        start = 8 * first if byte_order == "little_endian" else 8 * first + 7
-        sig = cantools.database.can.Signal("S", start, length, byte_order, signed)
-        raw, _ = signal_raw(data, sig)
-        want = [_bits_reference(bytes(row), start, length, byte_order) for row in data]
-        if signed:
-            want = [v - (1 << length) if v >> (length - 1) else v for v in want]
-        assert raw.tolist() == want, (first, byte_order)
-        assert raw.dtype == np.dtype(f"{'i' if signed else 'u'}{nb}")
+    # rows of 8 and 12 bytes (12: not a multiple of 8-byte signals), contiguous or a view
+    for data in (rng.integers(0, 256, (64, 8), dtype=np.uint8),
+                 rng.integers(0, 256, (64, 12), dtype=np.uint8),
+                 rng.integers(0, 256, (64, 16), dtype=np.uint8)[:, 3:11]):
+        data[0] = 0xFF  # all ones: the most negative and the largest values
+        data[1] = 0x80
+        for first in range(0, data.shape[1] + 1 - nb):
+            start = 8 * first if byte_order == "little_endian" else 8 * first + 7
+            sig = cantools.database.can.Signal("S", start, length, byte_order, signed)
+            raw, _ = signal_raw(data, sig)
+            want = [_bits_reference(bytes(row), start, length, byte_order) for row in data]
+            if signed:
+                want = [v - (1 << length) if v >> (length - 1) else v for v in want]
+            assert raw.tolist() == want, (first, byte_order, data.shape)
+            assert raw.dtype == np.dtype(f"{'i' if signed else 'u'}{nb}")

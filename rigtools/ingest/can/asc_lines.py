@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
-from rigtools.ingest.can.frames import CanFrameBatch
+from rigtools.ingest.can.frames import CanFrameBatch, take_rows
 from rigtools.ingest.can.text_digits import HEX_VALUE, POW10
 
 __all__ = ["FrameLines", "parse_frame_lines"]
@@ -81,7 +81,7 @@ class FrameLines:
         start = np.repeat(np.array([r[2] for r in runs]), size)
         return CanFrameBatch(
             self.mantissa[at] / self.scale[at] + start, self.can_id[at], self.extended[at],
-            np.zeros(at.size, bool), self.length[at], self.data[at], self.channel[at],
+            np.zeros(at.size, bool), self.length[at], take_rows(self.data, at), self.channel[at],
             at + first_line, "line",
         )
 

@@ -29,7 +29,7 @@ import pandas as pd
 
 from rigtools.ingest.builder import MAX_CLOCK_POINTS, RecordingBuilder
 from rigtools.ingest.can.dbc import decode_signal, multiplex_mask, signal_raw
-from rigtools.ingest.can.frames import CanFrameBatch
+from rigtools.ingest.can.frames import CanFrameBatch, take_rows
 from rigtools.ingest.can.layout_hint import fast_message_warning
 from rigtools.ingest.layout import CanLayout, CanUniform
 from rigtools.ingest.recording import IngestReport
@@ -109,7 +109,7 @@ def assemble_can(
                      else np.unique(bus_of_rows).tolist())
             for bus in buses:
                 bus_rows = rows if len(buses) == 1 else rows[bus_of_rows == bus]
-                data = batch.data[bus_rows]
+                data = take_rows(batch.data, bus_rows)
                 stamps = batch.timestamp_s[bus_rows]
                 uniform = uniform_by_key.get(key, ())
                 if uniform:

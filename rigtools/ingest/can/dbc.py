@@ -146,6 +146,9 @@ def _aligned_field(data: np.ndarray, start: int, length: int, byte_order: str,
     if first + nb > data.shape[1]:
         return None
     kind = "i" if signed else "u"
+    if data.flags.c_contiguous and first % nb == 0 and data.shape[1] % nb == 0:
+        # the rows viewed as integers in place: a typed strided copy, not a byte-wise one
+        return data.view(f"{order}{kind}{nb}")[:, first // nb].astype(f"={kind}{nb}")
     field = np.ascontiguousarray(data[:, first : first + nb]).view(f"{order}{kind}{nb}")[:, 0]
     return field.astype(f"={kind}{nb}")
 

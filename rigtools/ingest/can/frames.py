@@ -14,7 +14,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["CanFrameBatch", "concat", "from_messages"]
+__all__ = ["CanFrameBatch", "concat", "from_messages", "take_rows"]
+
+
+def take_rows(a: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """``a[rows]`` for a 2-D array (index array or boolean mask), each row moved as one item.
+
+    NumPy gathers the rows of a small 2-D ``uint8`` array byte column by byte column; viewed
+    as one ``void`` item per row the same gather is 5-8x faster (8 to 64-byte payload rows,
+    256 k rows: 2.2 against 0.29 ms at 8 bytes). The values are the same bytes.
+    """
+    if a.ndim != 2 or not a.flags.c_contiguous or a.shape[1] == 0:
+        return a[rows]
+    width = a.shape[1]
+    items = a.view(f"V{a.itemsize * width}")[:, 0]
+    return items[rows].view(a.dtype).reshape(-1, width)
 
 
 @dataclass(frozen=True, eq=False)
@@ -69,7 +83,7 @@ class CanFrameBatch:
             self.is_extended[mask_or_index],
             self.is_fd[mask_or_index],
             self.length[mask_or_index],
-            self.data[mask_or_index],
+            take_rows(self.data, mask_or_index),
             self.channel[mask_or_index],
             self.position[mask_or_index],
             self.position_unit,
