@@ -152,6 +152,8 @@ def unwrap_counter(
     stamps_s: np.ndarray | None = None,
     tick_rate_Hz: float | None = None,
     payload: Payload | None = None,
+    *,
+    steady_first: bool = True,
 ) -> UnwrappedCounter:
     """Unwrap a modular sample counter into absolute ticks.
 
@@ -171,6 +173,10 @@ def unwrap_counter(
         do), used to tell a replayed run from a restart when the clock steps back with the
         counter (see Notes); or a callable returning that array, called only then (the
         fingerprints of a clean recording are never computed).
+    steady_first : bool
+        Try the steady case first (:func:`_steady`: every step the same forward step, the
+        common case of a clean recording) in one pass. It gives what the general path gives
+        (tested against it, ``steady_first=False``), about ten times faster.
 
     Returns
     -------
@@ -206,8 +212,12 @@ def unwrap_counter(
     if n == 0:
         empty = np.zeros(0, np.int64)
         return UnwrappedCounter(empty, np.zeros(0, bool), 0, 0, empty)
+    if steady_first:
+        steady = _steady(c, int(modulus), stamps_s, tick_rate_Hz)
+        if steady is not None:
+            return steady
     outlier = counter_outliers(c, modulus, stamps_s, tick_rate_Hz)
-    if outlier.any():
+    if outlier.any() and not outlier.all():  # all: a counter too short for its step
         good = np.flatnonzero(~outlier)
         sub = _unwrap(c[good], int(modulus),
                       None if stamps_s is None else np.asarray(stamps_s, np.float64)[good],
@@ -222,6 +232,40 @@ def unwrap_counter(
         return UnwrappedCounter(ticks, keep, sub.n_duplicate, sub.n_reordered,
                                 good[sub.restarts], sub.clock_jumps, int(outlier.sum()), outlier)
     return _unwrap(c, int(modulus), stamps_s, tick_rate_Hz, payload)
+
+
+def _steady(c: np.ndarray, m: int, stamps_s: np.ndarray | None,
+            tick_rate_Hz: float | None) -> UnwrappedCounter | None:
+    """The unwrapped counter when every step is the same step ``0 < d <= m/2``, else None.
+
+    Then no value is an outlier (:func:`counter_outliers` needs a step other than the usual
+    one), no frame is lost, late or duplicated, and no counter restarts: the ticks are
+    ``c[0] + d k``. The clock matters only for ``clock_jumps``, counted as :func:`_unwrap`
+    counts them (a clock step of more than half a wrap, not undone by the next step).
+    """
+    n = c.shape[0]
+    if n < 2:
+        return None
+    d0 = (int(c[1]) - int(c[0])) % m
+    if not 0 < d0 <= m // 2:
+        return None
+    d = np.diff(c)
+    if m & (m - 1) == 0:
+        d &= m - 1  # the modulo of a power of two, a tenth of the cost of np.mod
+    else:
+        d %= m
+    if not bool(np.all(d == d0)):
+        return None
+    clock_jumps = 0
+    if stamps_s is not None and tick_rate_Hz is not None:
+        with np.errstate(invalid="ignore", over="ignore"):
+            expected = np.diff(np.asarray(stamps_s, np.float64)) * float(tick_rate_Hz)
+        for p in np.flatnonzero(expected > m / 2).tolist():
+            after = expected[p + 1] if p + 1 < expected.size else np.nan
+            if np.isfinite(expected[p]) and not (np.isfinite(after) and after < -m / 4):
+                clock_jumps += 1
+    ticks = int(c[0]) + d0 * np.arange(n, dtype=np.int64)
+    return UnwrappedCounter(ticks, np.ones(n, bool), 0, 0, np.zeros(0, np.int64), clock_jumps)
 
 
 def _subset(payload: Payload | None, rows: np.ndarray) -> Payload | None:
