@@ -17,7 +17,6 @@ from decimal import Decimal
 from typing import Any
 
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
 
 from rigtools.ingest.can.frames import CanFrameBatch
 from rigtools.ingest.recording import IngestReport
@@ -339,7 +338,12 @@ class ObjectParser:
         offsets, types, versions, sizes, hsizes = walked
         report = self.report
         key = types * 4 + versions
-        uniq = key[:1] if bool((key == key[0]).all()) else np.unique(key)
+        if bool((key == key[0]).all()):
+            uniq = key[:1]
+        elif int(key.max()) < 1 << 12:  # object types of 0..1023: counted, not sorted
+            uniq = np.flatnonzero(np.bincount(key))
+        else:
+            uniq = np.unique(key)
         a = np.frombuffer(buf, np.uint8)
         pieces: list[tuple[np.ndarray, ...]] = []
         for kv in uniq.tolist():
@@ -371,7 +375,7 @@ class ObjectParser:
                     continue
                 offs = offsets[idx]
             seq = np.arange(offsets.size) if idx is None else idx
-            rec = _gather(buf, a, offs, dt)
+            rec = _gather(buf, offs, dt)
             got = self._frame_columns(t, v, rec, a, offs, take(sizes, idx), take(hsizes, idx),
                                       origin_of)
             if got is None:
@@ -432,7 +436,7 @@ class ObjectParser:
             dfl = np.clip(np.minimum(valid, span), 0, 64)
             start = offs + (16 + _HEADER_REST[v] + 40)
             padded = np.concatenate([a, np.zeros(64, np.uint8)])
-            data = sliding_window_view(padded, 64)[start]
+            data = _items_at(padded.data, start, 64).view(np.uint8).reshape(-1, 64)
             data = np.where(np.arange(64) < dfl[:, None], data, 0).astype(np.uint8)
             length = np.minimum(valid, 64).astype(np.uint8)
         elif t == _CAN_FD_MESSAGE:
@@ -531,7 +535,7 @@ class ContainerOrigin:
         return int(self.origins[np.searchsorted(self.starts, p, side="right") - 1])
 
 
-def _gather(buf: bytes, a: np.ndarray, offs: np.ndarray, dt: np.dtype) -> np.ndarray:
+def _gather(buf: bytes, offs: np.ndarray, dt: np.dtype) -> np.ndarray:
     """Records of dtype ``dt`` at byte offsets ``offs`` of ``buf`` (strided view when regular)."""
     w = dt.itemsize
     if offs.size > 1:
@@ -541,5 +545,15 @@ def _gather(buf: bytes, a: np.ndarray, offs: np.ndarray, dt: np.dtype) -> np.nda
         ):
             return np.ndarray((offs.size,), dt, buffer=buf, offset=int(offs[0]),
                               strides=(stride,))
-    rows = sliding_window_view(a, w)[offs]
-    return rows.view(dt).reshape(offs.size)
+    return _items_at(buf, offs, w).view(dt)
+
+
+def _items_at(buf: bytes, offs: np.ndarray, w: int) -> np.ndarray:
+    """The ``w``-byte strings of ``buf`` at byte offsets ``offs``, one ``void`` item each.
+
+    A view with an item at every byte (stride 1, overlapping items) indexed by ``offs``:
+    each item moved whole, 5-8x faster than gathering the rows of a sliding-window view
+    byte by byte. ``offs`` must lie in ``[0, len(buf) - w]``.
+    """
+    view = np.ndarray((len(buf) - w + 1,), f"V{w}", buffer=buf, offset=0, strides=(1,))
+    return view[offs]
