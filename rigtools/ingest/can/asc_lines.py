@@ -23,9 +23,8 @@ import re
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
 
-from rigtools.ingest.can.frames import CanFrameBatch, take_rows
+from rigtools.ingest.can.frames import CanFrameBatch, byte_rows, take_rows
 from rigtools.ingest.can.text_digits import HEX_VALUE, POW10
 
 __all__ = ["FrameLines", "parse_frame_lines"]
@@ -406,7 +405,7 @@ def parse_frame_lines(block: bytes) -> FrameLines:
         lay = _layout_of(block[s0 : s0 + width])
         if lay is None:
             continue
-        rows = sliding_window_view(a, width)[starts[idx]]
+        rows = byte_rows(a, starts[idx], width)
         _parse_layout(rows, lay, out, idx)
     rest = np.flatnonzero(~out["plain"] & (lens >= 14))
     if rest.size:

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from rigtools.ingest.can.frames import CanFrameBatch
+from rigtools.ingest.can.frames import CanFrameBatch, byte_rows
 from rigtools.ingest.recording import IngestReport
 
 __all__ = [
@@ -436,7 +436,7 @@ class ObjectParser:
             dfl = np.clip(np.minimum(valid, span), 0, 64)
             start = offs + (16 + _HEADER_REST[v] + 40)
             padded = np.concatenate([a, np.zeros(64, np.uint8)])
-            data = _items_at(padded.data, start, 64).view(np.uint8).reshape(-1, 64)
+            data = byte_rows(padded, start, 64)
             data = np.where(np.arange(64) < dfl[:, None], data, 0).astype(np.uint8)
             length = np.minimum(valid, 64).astype(np.uint8)
         elif t == _CAN_FD_MESSAGE:
@@ -545,15 +545,5 @@ def _gather(buf: bytes, offs: np.ndarray, dt: np.dtype) -> np.ndarray:
         ):
             return np.ndarray((offs.size,), dt, buffer=buf, offset=int(offs[0]),
                               strides=(stride,))
-    return _items_at(buf, offs, w).view(dt)
+    return byte_rows(buf, offs, w).view(dt).reshape(offs.size)
 
-
-def _items_at(buf: bytes, offs: np.ndarray, w: int) -> np.ndarray:
-    """The ``w``-byte strings of ``buf`` at byte offsets ``offs``, one ``void`` item each.
-
-    A view with an item at every byte (stride 1, overlapping items) indexed by ``offs``:
-    each item moved whole, 5-8x faster than gathering the rows of a sliding-window view
-    byte by byte. ``offs`` must lie in ``[0, len(buf) - w]``.
-    """
-    view = np.ndarray((len(buf) - w + 1,), f"V{w}", buffer=buf, offset=0, strides=(1,))
-    return view[offs]

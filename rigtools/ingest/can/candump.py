@@ -45,10 +45,9 @@ from collections.abc import Iterator
 from typing import BinaryIO, Final
 
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
 
 from rigtools.errors import RecordingFormatError
-from rigtools.ingest.can.frames import CanFrameBatch
+from rigtools.ingest.can.frames import CanFrameBatch, byte_rows
 from rigtools.ingest.can.reader import CanLogReader
 from rigtools.ingest.can.text_digits import HEX_VALUE, POW10
 from rigtools.ingest.recording import IngestReport
@@ -254,7 +253,7 @@ def _parse_block(block: bytes, first_line: int, dominant: bool = True) -> tuple[
         bounds = np.searchsorted(inv[order], np.arange(uniq.size + 1))
         for g, k in enumerate(uniq.tolist()):
             idx = fast[order[bounds[g] : bounds[g + 1]]]
-            m = sliding_window_view(a, _columns(k)[-1])[starts[idx]]
+            m = byte_rows(a, starts[idx], _columns(k)[-1])
             rejected = _parse_group(m, k, idx, rows, chan_cache)
             if rejected is not None:
                 bad_fast.append(rejected)
@@ -317,7 +316,7 @@ def _parse_dominant(block: bytes, a: np.ndarray, starts: np.ndarray, nl: np.ndar
     k = _layout_key(line[:-1] if cr else line)
     if k is None or _columns(k)[-1] != width - cr:
         return None
-    m = sliding_window_view(a, width)[starts[idx]]
+    m = byte_rows(a, starts[idx], width)
     ok = _uniform_rows(m, k)
     if cr:
         ok &= m[:, width - 1] == 13

@@ -11,10 +11,11 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-__all__ = ["CanFrameBatch", "concat", "from_messages", "take_rows"]
+__all__ = ["CanFrameBatch", "byte_rows", "concat", "from_messages", "take_rows"]
 
 
 def take_rows(a: np.ndarray, rows: np.ndarray) -> np.ndarray:
@@ -29,6 +30,25 @@ def take_rows(a: np.ndarray, rows: np.ndarray) -> np.ndarray:
     width = a.shape[1]
     items = a.view(f"V{a.itemsize * width}")[:, 0]
     return items[rows].view(a.dtype).reshape(-1, width)
+
+
+def byte_rows(buf: Any, offsets: np.ndarray, width: int) -> np.ndarray:
+    """The ``width`` bytes of ``buf`` at each of ``offsets``, as a ``(n, width)`` uint8 array.
+
+    A view with an item of ``width`` bytes at every byte of ``buf`` (stride 1, overlapping
+    items) indexed by ``offsets``: each row moved whole, 5-8x faster than gathering the rows
+    of a sliding-window view byte column by byte column. ``buf`` is any buffer (bytes, a
+    memoryview, a uint8 array); ``offsets`` must lie in ``[0, len(buf) - width]``.
+    """
+    size = memoryview(buf).nbytes
+    if width == 0:
+        return np.zeros((offsets.size, 0), np.uint8)
+    if size < width:
+        if offsets.size:
+            raise IndexError(f"rows of {width} bytes asked of a buffer of {size}")
+        return np.zeros((0, width), np.uint8)
+    items = np.ndarray((size - width + 1,), f"V{width}", buffer=buf, offset=0, strides=(1,))
+    return items[offsets].view(np.uint8).reshape(-1, width)
 
 
 @dataclass(frozen=True, eq=False)
