@@ -271,3 +271,38 @@ def test_long_timestamps_take_the_exact_path(stamp):
     text = f"({stamp}) can0 123#00\n" * 3  # uniform block
     batch, _ = read_log(text)
     assert_same_frames(batch, pycan_messages(text))
+
+
+def _pycan_line_by_line(text: str) -> list[can.Message]:
+    """python-can's messages of each line read alone (a line it cannot read gives none)."""
+    out: list[can.Message] = []
+    for line in text.split("\n"):  # not splitlines(): it also splits at \v, \f, \x1c...
+        try:
+            out += pycan_messages(line)
+        except Exception:  # python-can raises many kinds on a bad line
+            continue
+    return out
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(row=st.integers(0, 99), col=st.integers(0, 45), byte=st.integers(1, 255).filter(
+    lambda b: b not in (10, 13)))
+def test_one_damaged_character_in_a_uniform_block_reads_as_python_can_reads_each_line(
+        row, col, byte):
+    """The compiled fixed-layout parser: every field's check, against python-can line by line.
+
+    100 lines of one layout (the zero-copy matrix path), one character replaced by any byte
+    but a line end: the damaged line goes the general way, the others stay as they were.
+    """
+    lines = [f"(1700000000.{i:06d}) can0 1{i % 16:X}3#{i:02X}00FFa5{i % 10}0b1c2d3" .encode()
+             for i in range(100)]
+    line = bytearray(lines[row])
+    line[col % len(line)] = byte
+    lines[row] = bytes(line)
+    raw = b"\n".join(lines) + b"\n"
+    batch, report = read_log(raw)
+    text = raw.decode("utf-8", errors="replace")
+    if raw.decode("utf-8", errors="ignore") != text:
+        return  # an invalid UTF-8 byte: python-can cannot open the file as text at all
+    assert_same_frames(batch, _pycan_line_by_line(text))
+    assert len(batch) + report.n_rejected == 100

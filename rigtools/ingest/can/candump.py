@@ -49,7 +49,8 @@ import numpy as np
 from rigtools.errors import RecordingFormatError
 from rigtools.ingest.can.frames import CanFrameBatch, byte_rows
 from rigtools.ingest.can.reader import CanLogReader
-from rigtools.ingest.can.text_digits import HEX_VALUE, POW10
+from rigtools.ingest.can.text_digits import HEX_VALUE
+from rigtools.ingest.can.text_kernels import parse_fixed_rows
 from rigtools.ingest.recording import IngestReport
 
 __all__ = ["BLOCK_BYTES", "MAX_LINE_BYTES", "NAME", "READER", "iter_batches", "sniff"]
@@ -428,13 +429,6 @@ def _uniform_ok(m: np.ndarray, k: int) -> bool:
     return not suffix or bool(np.isin(m[:, width - 1], np.frombuffer(b"RrTt", np.uint8)).all())
 
 
-def _row_ok(bad: np.ndarray) -> np.ndarray | None:
-    """Per-row ``not any(bad)`` of a 2-D mask, or None when no element is bad (fast path)."""
-    if bad.size == 0 or not bad.any():
-        return None
-    return np.asarray(~bad.any(axis=1))
-
-
 def _parse_group(m: np.ndarray, k: int, idx: np.ndarray, rows: _Rows,
                  chan_cache: dict[bytes, int]) -> np.ndarray | None:
     """Parse lines sharing layout ``k`` (character matrix ``m``, one row per line).
@@ -442,42 +436,28 @@ def _parse_group(m: np.ndarray, k: int, idx: np.ndarray, rows: _Rows,
     Returns the line indices that must go the slow way (None when there is none).
     """
     il, fl, cl, idl, fdk, remote, dl, _, c_chan, c_id, c_data, _ = _columns(k)
-    digits = m[:, 1 : 1 + il] - np.uint8(48)  # wraps below '0': one test catches both sides
-    frac = m[:, 2 + il : 2 + il + fl] - np.uint8(48)
-    nib = HEX_VALUE[m[:, c_id : c_id + idl]]
-    chan_chars = m[:, c_chan : c_chan + cl]
-    checks = [digits > 9, frac > 9, nib > 15, (chan_chars - np.uint8(33)) > 93]
-    if fdk:
-        checks.append(HEX_VALUE[m[:, c_data - 1 : c_data]] > 15)
-    hexd = np.zeros((m.shape[0], 0), np.uint8)
-    if remote:
-        checks.append((m[:, c_data + 1 : c_data + dl] - np.uint8(48)) > 9)
-    elif dl:
-        hexd = HEX_VALUE[m[:, c_data : c_data + dl]]
-        checks.append(hexd > 15)
-    good: np.ndarray | None = None
-    for c in checks:
-        ok = _row_ok(c)
-        if ok is not None:
-            good = ok if good is None else good & ok
+    n = m.shape[0]
+    nb = dl // 2
+    good = np.empty(n, bool)
+    can_id = np.empty(n, np.int64)
+    total = np.empty(n, np.int64)
+    payload = np.zeros((n, nb), np.uint8)
+    parse_fixed_rows(m, il, fl, cl, idl, fdk, remote, dl, c_chan, c_id, c_data, HEX_VALUE,
+                     good, can_id, total, payload)
     back = None
-    if good is not None:
+    if not bool(good.all()):
         back = idx[~good]
-        idx, m, digits, frac, nib = idx[good], m[good], digits[good], frac[good], nib[good]
-        chan_chars, hexd = chan_chars[good], hexd[good]
+        idx, m, can_id, total, payload = idx[good], m[good], can_id[good], total[good], \
+            payload[good]
         if idx.size == 0:
             return back
-    can_id = nib[:, 0].astype(np.int64)
-    for j in range(1, idl):
-        can_id = (can_id << 4) | nib[:, j]
+    chan_chars = m[:, c_chan : c_chan + cl]
     err = (can_id & _CAN_ERR_FLAG) != 0
     any_err = bool(err.any())
     if remote:
         rows.kind[idx] = np.where(err, _ERROR, _REMOTE) if any_err else _REMOTE
         return back
     rows.kind[idx] = np.where(err, _ERROR, _DATA) if any_err else _DATA
-    total = (digits.astype(np.int64) @ POW10[il - 1 :: -1][:il]) * POW10[fl] + (
-        frac.astype(np.int64) @ POW10[fl - 1 :: -1][:fl])
     ts = total.astype(np.float64) / float(10**fl)
     huge = total >= (1 << 53)
     if huge.any():  # beyond exact integers: let float() round the text as python-can does
@@ -487,12 +467,14 @@ def _parse_group(m: np.ndarray, k: int, idx: np.ndarray, rows: _Rows,
     rows.can_id[idx] = (can_id & 0x1FFFFFFF).astype(np.uint32)
     rows.ext[idx] = idl > 3
     rows.fd[idx] = bool(fdk)
-    nb = dl // 2
     rows.length[idx] = nb
     if nb:
         if nb > rows.data.shape[1]:
             rows.widen()
-        rows.data[idx, :nb] = (hexd[:, 0::2] << 4) | hexd[:, 1::2]
+        if nb == rows.data.shape[1]:  # whole rows: one void item each (take_rows' reason)
+            rows.data.view(f"V{nb}")[idx, 0] = payload.view(f"V{nb}")[:, 0]
+        else:
+            rows.data[idx, :nb] = payload
     if bool((chan_chars == chan_chars[0]).all()):
         name = bytes(chan_chars[0])
         c = chan_cache.get(name)

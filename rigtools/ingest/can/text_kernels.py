@@ -1,0 +1,80 @@
+"""Compiled (numba) parsing of fixed-layout candump lines: digits and hex fields per row.
+
+:mod:`rigtools.ingest.can.candump` gathers the lines that share one layout (the same field
+widths: ``(SSSSSSSSSS.FFFFFF) CHAN III#DDDDDDDDDDDDDDDD``) into a character matrix, one row
+per line. Its NumPy version looked each character up in a table over the whole matrix (a
+temporary per field, a row gather per check); this kernel reads every row once and gives
+the same numbers: whether each row's fields are what the layout says (decimal digits, hex
+digits, printable channel name), its identifier, its time stamp as an integer count of the
+last fraction digit, and its payload bytes. ``(SSS.FFF)`` becomes ``SSS * 10**fl + FFF``
+exactly (at most 18 digits, within int64), as the NumPy dot products with powers of ten did.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["parse_fixed_rows"]
+
+
+@njit(cache=True, nogil=True)
+def parse_fixed_rows(m: np.ndarray, il: int, fl: int, cl: int, idl: int, fdk: int,
+                     remote: int, dl: int, c_chan: int, c_id: int, c_data: int,
+                     hex_value: np.ndarray, ok: np.ndarray, can_id: np.ndarray,
+                     total: np.ndarray, data: np.ndarray) -> None:  # pragma: no cover
+    """Parse the rows of ``m`` (uint8, one line of layout columns per row) in place.
+
+    Parameters
+    ----------
+    m : numpy.ndarray
+        ``(n, width)`` characters (any strides).
+    il, fl, cl, idl, fdk, remote, dl, c_chan, c_id, c_data : int
+        The layout (``candump._columns``): integer and fraction digits of the stamp, channel
+        name length, identifier hex digits, CAN FD flag, remote frame, data characters, and
+        the columns where the channel, identifier and data start.
+    hex_value : numpy.ndarray
+        uint8 per byte: its value as a hex digit, 255 when it is none
+        (:data:`rigtools.ingest.can.text_digits.HEX_VALUE`).
+    ok, can_id, total, data : numpy.ndarray
+        Outputs: bool ``(n,)`` the row's fields are well formed; int64 ``(n,)`` identifier
+        bits (the error flag included); int64 ``(n,)`` the stamp's digits as one integer;
+        uint8 ``(n, >= dl // 2)`` payload bytes (untouched for a remote frame). Rows that are
+        not ``ok`` hold partial values.
+    """
+    n = m.shape[0]
+    nb = dl // 2
+    for r in range(n):
+        good = True
+        t = 0
+        for j in range(il):
+            v = np.int64(m[r, 1 + j]) - 48
+            good &= (v >= 0) & (v <= 9)
+            t = t * 10 + v
+        for j in range(fl):
+            v = np.int64(m[r, 2 + il + j]) - 48
+            good &= (v >= 0) & (v <= 9)
+            t = t * 10 + v
+        total[r] = t
+        for j in range(cl):
+            ch = m[r, c_chan + j]
+            good &= (ch >= 33) & (ch <= 126)
+        ident = 0
+        for j in range(idl):
+            v = np.int64(hex_value[m[r, c_id + j]])
+            good &= v <= 15
+            ident = (ident << 4) | (v & 15)
+        can_id[r] = ident
+        if fdk:
+            good &= hex_value[m[r, c_data - 1]] <= 15
+        if remote:
+            for j in range(1, dl):
+                v = np.int64(m[r, c_data + j]) - 48
+                good &= (v >= 0) & (v <= 9)
+        else:
+            for b in range(nb):
+                hi = hex_value[m[r, c_data + 2 * b]]
+                lo = hex_value[m[r, c_data + 2 * b + 1]]
+                good &= (hi <= 15) & (lo <= 15)
+                data[r, b] = ((hi & 15) << 4) | (lo & 15)
+        ok[r] = good
