@@ -274,9 +274,18 @@ def test_long_timestamps_take_the_exact_path(stamp):
 
 
 def _pycan_line_by_line(text: str) -> list[can.Message]:
-    """python-can's messages of each line read alone (a line it cannot read gives none)."""
+    """python-can's messages of each line read alone (a line it cannot read gives none).
+
+    A payload that is not plain hex digits gives none either: python-can reads each pair
+    with ``int(pair, 16)``, which takes ``+5`` or `` 5``; rigtools counts it unparsable
+    (the module docstring's "bad hex").
+    """
     out: list[can.Message] = []
     for line in text.split("\n"):  # not splitlines(): it also splits at \v, \f, \x1c...
+        payload = line.strip().split(" ")[-1].rpartition("#")[2]
+        if payload and payload[0] not in "Rr" and not all(
+                ch in "0123456789abcdefABCDEF" for ch in payload):
+            continue
         try:
             out += pycan_messages(line)
         except Exception:  # python-can raises many kinds on a bad line

@@ -26,6 +26,7 @@ import numpy as np
 
 from rigtools.ingest.can.frames import CanFrameBatch, byte_rows, take_rows
 from rigtools.ingest.can.text_digits import HEX_VALUE, POW10
+from rigtools.ingest.can.text_kernels import parse_asc_rows
 
 __all__ = ["FrameLines", "parse_frame_lines"]
 
@@ -312,37 +313,22 @@ def _layout_of(line: bytes) -> _Layout | None:
                    np.asarray(id_hex, np.intp), ext, np.asarray(data_hex, np.intp), dlc)
 
 
-def _valid(c: np.ndarray, lay: _Layout) -> np.ndarray:
-    """Rows of the checked columns ``c`` whose every character is of its column's class."""
-    cls = lay.classes
-    sep = c[:, cls == _SEP]
-    bad = ((sep != 32) & (sep != 9)).any(axis=1)
-    bad |= ((c[:, cls == _DIGIT] - np.uint8(48)) > 9).any(axis=1)
-    bad |= (HEX_VALUE[c[:, cls == _HEXC]] > 15).any(axis=1)
-    exact = cls >= 3
-    want = np.argmax(lay.table[cls[exact]], axis=1).astype(np.uint8)
-    bad |= (c[:, exact] != want).any(axis=1)
-    return ~bad
-
-
 def _parse_layout(rows: np.ndarray, lay: _Layout, out: dict[str, np.ndarray],
                   idx: np.ndarray) -> np.ndarray:
     """Parse the lines ``idx`` (character matrix ``rows``) of layout ``lay`` into ``out``.
 
-    Returns the mask of the lines that have the layout (the others are left alone).
+    Every checked column's character must be of its class
+    (:func:`~rigtools.ingest.can.text_kernels.parse_asc_rows`) and the identifier within 11
+    or 29 bits. Returns the mask of the lines that have the layout (the others are left alone).
     """
-    c = rows[:, lay.cols]
-    ok = _valid(c, lay)
-    digits = (c[:, lay.ts_digits] - np.uint8(48)).astype(np.float64)
-    mantissa = digits @ (10.0 ** np.arange(lay.ts_digits.size - 1, -1, -1))
-    ch = np.zeros(idx.size, np.int64)
-    for j in lay.ch_digits:
-        ch *= 10
-        ch += c[:, j] - np.uint8(48)
-    nib = HEX_VALUE[c[:, lay.id_hex]].astype(np.int64)
-    can_id = np.zeros(idx.size, np.int64)
-    for j in range(nib.shape[1]):
-        can_id = (can_id << 4) | (nib[:, j] & 15)
+    n = idx.size
+    ok = np.empty(n, bool)
+    mantissa = np.empty(n)
+    ch = np.empty(n, np.int64)
+    can_id = np.empty(n, np.int64)
+    data = np.zeros((n, 8), np.uint8)
+    parse_asc_rows(rows, lay.cols, lay.classes, lay.table, lay.ts_digits, lay.ch_digits,
+                   lay.id_hex, lay.data_hex, HEX_VALUE, ok, mantissa, ch, can_id, data)
     ok &= can_id <= (0x1FFFFFFF if lay.extended else 0x7FF)
     sel = idx if bool(ok.all()) else idx[ok]
     if sel.size == 0:
@@ -357,8 +343,7 @@ def _parse_layout(rows: np.ndarray, lay: _Layout, out: dict[str, np.ndarray],
     out["extended"][sel] = lay.extended
     out["length"][sel] = lay.dlc
     if lay.dlc:
-        h = HEX_VALUE[c[keep][:, lay.data_hex]] & 15
-        out["data"][sel, : lay.dlc] = (h[:, 0::2] << 4) | h[:, 1::2]
+        out["data"].view("V8")[sel, 0] = data[keep].view("V8")[:, 0]
     return ok
 
 

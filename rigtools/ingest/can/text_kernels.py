@@ -1,13 +1,14 @@
-"""Compiled (numba) parsing of fixed-layout candump lines: digits and hex fields per row.
+"""Compiled (numba) parsing of fixed-layout text-log lines: digits and hex fields per row.
 
-:mod:`rigtools.ingest.can.candump` gathers the lines that share one layout (the same field
-widths: ``(SSSSSSSSSS.FFFFFF) CHAN III#DDDDDDDDDDDDDDDD``) into a character matrix, one row
-per line. Its NumPy version looked each character up in a table over the whole matrix (a
-temporary per field, a row gather per check); this kernel reads every row once and gives
-the same numbers: whether each row's fields are what the layout says (decimal digits, hex
-digits, printable channel name), its identifier, its time stamp as an integer count of the
-last fraction digit, and its payload bytes. ``(SSS.FFF)`` becomes ``SSS * 10**fl + FFF``
-exactly (at most 18 digits, within int64), as the NumPy dot products with powers of ten did.
+:mod:`rigtools.ingest.can.candump` and :mod:`rigtools.ingest.can.asc_lines` gather the lines
+that share one layout (the same field widths, e.g. ``(SSSSSSSSSS.FFFFFF) CHAN III#DDDD...``)
+into a character matrix, one row per line. Their NumPy versions looked each character up in
+a table over the whole matrix (a temporary per field, a row gather per check); these kernels
+read every row once and give the same numbers: whether each row's fields are what the layout
+says, its identifier, its time stamp as an integer count of the last fraction digit, and its
+payload bytes. A stamp ``SSS.FFF`` becomes the integer ``SSSFFF`` exactly (at most 18 digits
+for candump, 15 for ASC: within int64, and below 2**53 where it is made a float), as the
+NumPy dot products with powers of ten did.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["parse_fixed_rows"]
+__all__ = ["parse_asc_rows", "parse_fixed_rows"]
 
 
 @njit(cache=True, nogil=True)
@@ -77,4 +78,53 @@ def parse_fixed_rows(m: np.ndarray, il: int, fl: int, cl: int, idl: int, fdk: in
                 lo = hex_value[m[r, c_data + 2 * b + 1]]
                 good &= (hi <= 15) & (lo <= 15)
                 data[r, b] = ((hi & 15) << 4) | (lo & 15)
+        ok[r] = good
+
+
+@njit(cache=True, nogil=True)
+def parse_asc_rows(rows: np.ndarray, cols: np.ndarray, classes: np.ndarray, table: np.ndarray,
+                   ts_digits: np.ndarray, ch_digits: np.ndarray, id_hex: np.ndarray,
+                   data_hex: np.ndarray, hex_value: np.ndarray, ok: np.ndarray,
+                   mantissa: np.ndarray, channel: np.ndarray, can_id: np.ndarray,
+                   data: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Parse the rows of ``rows`` (one ASC frame line of a known layout each) in place.
+
+    Parameters
+    ----------
+    rows : numpy.ndarray
+        ``(n, width)`` uint8 characters.
+    cols, classes, table : numpy.ndarray
+        The columns checked, the class of each and the (classes, 256) table of the characters
+        a class allows (``asc_lines._Layout``).
+    ts_digits, ch_digits, id_hex, data_hex : numpy.ndarray
+        Positions in ``cols`` of the stamp's digits, the channel's digits, the identifier's
+        hex digits and the data bytes' high and low hex digits.
+    hex_value : numpy.ndarray
+        uint8 per byte: its value as a hex digit, 255 when it is none.
+    ok, mantissa, channel, can_id, data : numpy.ndarray
+        Outputs: bool, every checked character of its class; float64 stamp digits as one
+        integer; int64 channel number as written; int64 identifier; uint8 ``(n, >= dlc)``
+        payload bytes. Rows that are not ``ok`` hold partial values.
+    """
+    n = rows.shape[0]
+    for r in range(n):
+        good = True
+        for k in range(cols.size):
+            good &= table[classes[k], rows[r, cols[k]]]
+        m = 0
+        for j in ts_digits:
+            m = m * 10 + (np.int64(rows[r, cols[j]]) - 48)
+        mantissa[r] = m
+        ch = 0
+        for j in ch_digits:
+            ch = ch * 10 + (np.int64(rows[r, cols[j]]) - 48)
+        channel[r] = ch
+        ident = 0
+        for j in id_hex:
+            ident = (ident << 4) | (np.int64(hex_value[rows[r, cols[j]]]) & 15)
+        can_id[r] = ident
+        for b in range(data_hex.size // 2):
+            hi = hex_value[rows[r, cols[data_hex[2 * b]]]] & 15
+            lo = hex_value[rows[r, cols[data_hex[2 * b + 1]]]] & 15
+            data[r, b] = (hi << 4) | lo
         ok[r] = good
