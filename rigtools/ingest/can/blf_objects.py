@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from rigtools.ingest.can.blf_kernels import walk_sound_objects
 from rigtools.ingest.can.frames import CanFrameBatch, byte_rows
 from rigtools.ingest.recording import IngestReport
 
@@ -161,10 +162,13 @@ class ObjectParser:
 
         Returns the offsets, types, header versions, object sizes and header sizes of the
         objects found (None when there is none) and sets ``self.stop`` to where the unfinished
-        remainder begins. Consecutive objects of one type and size are taken arithmetically,
-        their headers checked by NumPy in growing runs; elsewhere the walk goes object by
-        object, as python-can does: the next ``LOBJ`` must start within 8 bytes of the end of
-        the previous object (padding).
+        remainder begins. The walk goes object by object, as python-can does: the next
+        ``LOBJ`` must start within 8 bytes of the end of the previous object (padding). Sound
+        objects are walked by a compiled loop
+        (:func:`~rigtools.ingest.can.blf_kernels.walk_sound_objects`); where it stops, this
+        loop decides (damage, resynchronisation, objects cut at the block's end), taking
+        consecutive objects of one type and size arithmetically, their headers checked by
+        NumPy in growing runs.
         """
         n = len(buf)
         unpack = OBJ_BASE.unpack_from
@@ -178,7 +182,17 @@ class ObjectParser:
         run_step = 16  # objects checked at once when a run starts
         short_runs = 0  # short runs in a row: the object-by-object stretch after one doubles
         max_object = self.max_object
+        arr = np.frombuffer(buf, np.uint8)
+        # objects the compiled walk took (a classic CAN object takes 48 bytes; grown if full)
+        sound = np.empty((n // 40 + 16, 5), np.int64)
+        n_sound = 0
         while True:
+            if not self.resync:
+                got, pos = walk_sound_objects(arr, pos, max_object, sound, n_sound)
+                n_sound += got
+                if n_sound == sound.shape[0]:
+                    sound = np.concatenate([sound, np.empty_like(sound)])
+                    continue
             if self.resync:
                 j = find(LOBJ, pos)
                 if j < 0:
@@ -276,6 +290,20 @@ class ObjectParser:
             kinds.append((otype, hv, osize, hs))
             pos = j + stride * (count - 1) + osize
         self.stop = pos
+        walked = self._runs(starts, strides, counts, kinds)
+        if n_sound == 0:
+            return walked
+        took = sound[:n_sound]
+        if walked is None:
+            return tuple(np.ascontiguousarray(took[:, c]) for c in range(5))
+        merged = np.concatenate([took, np.stack(walked, axis=1)])
+        merged = merged[np.argsort(merged[:, 0], kind="stable")]
+        return tuple(np.ascontiguousarray(merged[:, c]) for c in range(5))
+
+    @staticmethod
+    def _runs(starts: list[int], strides: list[int], counts: list[int],
+              kinds: list[tuple[int, int, int, int]]) -> tuple[np.ndarray, ...] | None:
+        """The objects of the runs the Python walk took, as per-object columns."""
         if not starts:
             return None
         if len(starts) == 1:
