@@ -18,8 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from rigtools.ingest.can.blf_kernels import walk_sound_objects
-from rigtools.ingest.can.frames import CanFrameBatch, byte_rows
+from rigtools.ingest.can.blf_kernels import classic_fields, walk_sound_objects
+from rigtools.ingest.can.frames import CanFrameBatch, byte_rows, take_rows
 from rigtools.ingest.recording import IngestReport
 
 __all__ = [
@@ -403,7 +403,7 @@ class ObjectParser:
                     continue
                 offs = offsets[idx]
             seq = np.arange(offsets.size) if idx is None else idx
-            rec = _gather(buf, offs, dt)
+            rec = _classic(a, offs, v) if t in _CLASSIC else _gather(buf, offs, dt)
             got = self._frame_columns(t, v, rec, a, offs, take(sizes, idx), take(hsizes, idx),
                                       origin_of)
             if got is None:
@@ -434,7 +434,7 @@ class ObjectParser:
         out.add(tuple(merged))
 
     def _frame_columns(
-        self, t: int, v: int, rec: np.ndarray, a: np.ndarray, offs: np.ndarray,
+        self, t: int, v: int, rec: Any, a: np.ndarray, offs: np.ndarray,
         osz: np.ndarray, hsz: np.ndarray, origin_of: ContainerOrigin,
     ) -> tuple[np.ndarray | None, tuple[np.ndarray, ...]] | None:
         """Columns (timestamp, id, extended, fd, length, data, channel) of one object type."""
@@ -450,7 +450,7 @@ class ObjectParser:
         else:
             bad = (rec["fl"] & 0x80) != 0
             is_fd = ((rec["fdfl"] & 0x01) != 0 if t == _CAN_FD_MESSAGE
-                     else np.zeros(rec.size, bool))
+                     else np.zeros(offs.size, bool))
         if bad.any():
             report.reject("remote_frame", int(bad.sum()), first(bad))
         if t == _CAN_FD_MESSAGE_64:
@@ -488,7 +488,7 @@ class ObjectParser:
                 return None
             # fields one by one: indexing the strided records would copy every field
             raw_id, ch, flags, ts = raw_id[keep], ch[keep], flags[keep], ts[keep]
-            data, length, is_fd = data[keep], length[keep], is_fd[keep]
+            data, length, is_fd = take_rows(data, keep), length[keep], is_fd[keep]
         if length.size and data.shape[1] == 64 and int(length.max()) <= 8:
             data = data[:, :8]
         width = data.shape[1]
@@ -561,6 +561,21 @@ class ContainerOrigin:
                 return np.repeat(self.origins, counts)
             return self.origins[np.searchsorted(self.starts, p, side="right") - 1]
         return int(self.origins[np.searchsorted(self.starts, p, side="right") - 1])
+
+
+_CLASSIC = frozenset({_CAN_MESSAGE, _CAN_MESSAGE2})
+
+
+def _classic(a: np.ndarray, offs: np.ndarray, v: int) -> dict[str, np.ndarray]:
+    """The fields of classic CAN objects as contiguous columns (the names of ``_DTYPES``)."""
+    n = offs.size
+    rec = {"flags": np.empty(n, np.uint32), "ts": np.empty(n, np.uint64),
+           "ch": np.empty(n, np.uint16), "fl": np.empty(n, np.uint8),
+           "dlc": np.empty(n, np.uint8), "id": np.empty(n, np.uint32),
+           "data": np.empty((n, 8), np.uint8)}
+    classic_fields(a, offs, 16 + _HEADER_REST[v], rec["flags"], rec["ts"], rec["ch"],
+                   rec["fl"], rec["dlc"], rec["id"], rec["data"])
+    return rec
 
 
 def _gather(buf: bytes, offs: np.ndarray, dt: np.dtype) -> np.ndarray:
