@@ -233,3 +233,22 @@ def test_a_counter_whose_every_value_looks_corrupted_is_unwrapped_not_crashed():
     c = (2 * np.arange(10)) % 3
     un = unwrap_counter(c, 3, np.arange(10) * 0.02, 100.0)
     assert un.ticks.shape == (10,) and un.n_outlier == 0
+
+
+@given(n=st.integers(1, 400), seed=st.integers(0, 2**32 - 1), ties=st.booleans())
+@settings(max_examples=300, deadline=None)
+def test_timebase_check_gives_the_numpy_median_figures_bit_for_bit(n, seed, ties):
+    """Start time and jitter against np.median written out (odd and even sizes, ties)."""
+    rng = np.random.default_rng(seed)
+    idx = np.sort(rng.choice(10 * n, n, replace=False)).astype(np.float64)
+    jitter = rng.normal(0, 1e-5, n)
+    if ties:
+        jitter = np.round(jitter, 5)
+    t = 1.7e9 + idx / 2560.0 + jitter
+    t0, stats = timebase_check(idx, t, 2560.0)
+    offset = t - idx / 2560.0
+    want_t0 = float(np.median(offset))
+    resid = offset - want_t0
+    assert t0 == want_t0
+    assert stats["jitter_s"] == float(1.4826 * np.median(np.abs(resid - np.median(resid))))
+    assert stats["max_abs_residual_s"] == float(np.max(np.abs(resid)))
