@@ -277,7 +277,7 @@ def _swallowed_header(src: _Source, body: bytes, pad: bytes) -> int:
     return -1
 
 
-def _inflate_whole(payload: memoryview, claimed: int, bound: int) -> bytes | None:
+def _inflate_whole(payload: memoryview, claimed: int, bound: int) -> bytearray | None:
     """A sound container's zlib stream inflated in one call of libdeflate, or None.
 
     libdeflate inflates 2-3x faster than zlib's streaming decompressor, but needs the output
@@ -405,10 +405,12 @@ def iter_batches(
             warned_claim = True
             report.warn(f"{path}: container at byte {offset} claims {claimed} uncompressed "
                         f"bytes; decompression bounded to {max_container_bytes}")
+        data: bytes | bytearray
+        inflated = _inflate_whole(payload, claimed, max_container_bytes) if method == 2 else None
         if method == 0:
             data = bytes(payload)
-        elif method == 2 and (data := _inflate_whole(payload, claimed, max_container_bytes)):
-            pass
+        elif inflated is not None:
+            data = inflated
         elif method == 2:
             z = zlib.decompressobj()
             try:

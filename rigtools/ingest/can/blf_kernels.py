@@ -37,12 +37,12 @@ def _find_signature(buf: np.ndarray, lo: int, hi: int) -> int:  # pragma: no cov
 
 
 @njit(cache=True, nogil=True)
-def _u16(buf: np.ndarray, j: int) -> int:  # pragma: no cover - compiled
+def _u16(buf: np.ndarray, j: int) -> np.int64:  # pragma: no cover - compiled
     return np.int64(buf[j]) | (np.int64(buf[j + 1]) << 8)
 
 
 @njit(cache=True, nogil=True)
-def _u32(buf: np.ndarray, j: int) -> int:  # pragma: no cover - compiled
+def _u32(buf: np.ndarray, j: int) -> np.int64:  # pragma: no cover - compiled
     return _u16(buf, j) | (_u16(buf, j + 2) << 16)
 
 
@@ -76,7 +76,7 @@ def walk_sound_objects(buf: np.ndarray, pos: int, max_object: int, out: np.ndarr
         j = _find_signature(buf, pos, min(pos + 8, n))
         if j < 0 or j + 16 > n:
             break
-        osize = _u32(buf, j + 8)
+        osize = int(_u32(buf, j + 8))
         if osize < 16 or osize > max_object:
             break
         end = j + osize

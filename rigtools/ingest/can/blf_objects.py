@@ -87,13 +87,13 @@ _DTYPES = {(t, v): _record_dtype(t, v) for t in _FRAME_TYPES for v in (1, 2)}
 class ParseBlock:
     """Decompressed data waiting to be parsed, with the container each byte came from."""
 
-    parts: list[bytes] = field(default_factory=list)
+    parts: list[bytes | bytearray] = field(default_factory=list)
     starts: list[int] = field(default_factory=list)  # offset in the joined block
     origins: list[int] = field(default_factory=list)  # container byte offset in the file
     size: int = 0
     need: int = 0  # bytes the first (unfinished) object needs before parsing is worth it
 
-    def add(self, data: bytes, origin: int) -> None:
+    def add(self, data: bytes | bytearray, origin: int) -> None:
         """Append decompressed data of the container at file offset ``origin`` (bytes)."""
         if not data:
             return
@@ -156,7 +156,7 @@ class ObjectParser:
 
     # -- walking object headers --------------------------------------------------------------
     def walk(
-        self, buf: bytes, origin_of: ContainerOrigin, final: bool = True
+        self, buf: bytes | bytearray, origin_of: ContainerOrigin, final: bool = True
     ) -> tuple[np.ndarray, ...] | None:
         """Locate the complete objects of ``buf``.
 
@@ -322,7 +322,7 @@ class ObjectParser:
             kd = np.repeat(np.asarray(kinds, np.int64), ct, axis=0)
         return offsets, kd[:, 0], kd[:, 1], kd[:, 2], kd[:, 3]
 
-    def _inner_header(self, buf: bytes, start: int, stop: int) -> int:
+    def _inner_header(self, buf: bytes | bytearray, start: int, stop: int) -> int:
         """Offset of the first plausible object header in ``buf[start:stop]``, or -1."""
         j = buf.find(LOBJ, start, stop)
         while j >= 0 and j + 16 <= len(buf):
@@ -361,8 +361,8 @@ class ObjectParser:
                     rest.need = j + OBJ_BASE.unpack_from(tail, j)[3]
         return rest
 
-    def _decode(self, buf: bytes, walked: tuple[np.ndarray, ...], origin_of: ContainerOrigin,
-                out: FrameColumns) -> None:
+    def _decode(self, buf: bytes | bytearray, walked: tuple[np.ndarray, ...],
+                origin_of: ContainerOrigin, out: FrameColumns) -> None:
         offsets, types, versions, sizes, hsizes = walked
         report = self.report
         key = types * 4 + versions
@@ -569,7 +569,7 @@ _CLASSIC = frozenset({_CAN_MESSAGE, _CAN_MESSAGE2})
 def _classic(a: np.ndarray, offs: np.ndarray, v: int) -> dict[str, np.ndarray]:
     """The fields of classic CAN objects as contiguous columns (the names of ``_DTYPES``)."""
     n = offs.size
-    rec = {"flags": np.empty(n, np.uint32), "ts": np.empty(n, np.uint64),
+    rec: dict[str, np.ndarray] = {"flags": np.empty(n, np.uint32), "ts": np.empty(n, np.uint64),
            "ch": np.empty(n, np.uint16), "fl": np.empty(n, np.uint8),
            "dlc": np.empty(n, np.uint8), "id": np.empty(n, np.uint32),
            "data": np.empty((n, 8), np.uint8)}
@@ -578,7 +578,7 @@ def _classic(a: np.ndarray, offs: np.ndarray, v: int) -> dict[str, np.ndarray]:
     return rec
 
 
-def _gather(buf: bytes, offs: np.ndarray, dt: np.dtype) -> np.ndarray:
+def _gather(buf: bytes | bytearray, offs: np.ndarray, dt: np.dtype) -> np.ndarray:
     """Records of dtype ``dt`` at byte offsets ``offs`` of ``buf`` (strided view when regular)."""
     w = dt.itemsize
     if offs.size > 1:

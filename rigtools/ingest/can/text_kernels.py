@@ -47,36 +47,42 @@ def parse_fixed_rows(m: np.ndarray, il: int, fl: int, cl: int, idl: int, fdk: in
     nb = dl // 2
     for r in range(n):
         good = True
-        t = 0
+        t = np.int64(0)
         for j in range(il):
             v = np.int64(m[r, 1 + j]) - 48
-            good &= (v >= 0) & (v <= 9)
+            if v < 0 or v > 9:
+                good = False
             t = t * 10 + v
         for j in range(fl):
             v = np.int64(m[r, 2 + il + j]) - 48
-            good &= (v >= 0) & (v <= 9)
+            if v < 0 or v > 9:
+                good = False
             t = t * 10 + v
         total[r] = t
         for j in range(cl):
             ch = m[r, c_chan + j]
-            good &= (ch >= 33) & (ch <= 126)
-        ident = 0
+            if ch < 33 or ch > 126:
+                good = False
+        ident = np.int64(0)
         for j in range(idl):
             v = np.int64(hex_value[m[r, c_id + j]])
-            good &= v <= 15
+            if v > 15:
+                good = False
             ident = (ident << 4) | (v & 15)
         can_id[r] = ident
-        if fdk:
-            good &= hex_value[m[r, c_data - 1]] <= 15
+        if fdk and hex_value[m[r, c_data - 1]] > 15:
+            good = False
         if remote:
             for j in range(1, dl):
                 v = np.int64(m[r, c_data + j]) - 48
-                good &= (v >= 0) & (v <= 9)
+                if v < 0 or v > 9:
+                    good = False
         else:
             for b in range(nb):
                 hi = hex_value[m[r, c_data + 2 * b]]
                 lo = hex_value[m[r, c_data + 2 * b + 1]]
-                good &= (hi <= 15) & (lo <= 15)
+                if hi > 15 or lo > 15:
+                    good = False
                 data[r, b] = ((hi & 15) << 4) | (lo & 15)
         ok[r] = good
 
@@ -110,16 +116,17 @@ def parse_asc_rows(rows: np.ndarray, cols: np.ndarray, classes: np.ndarray, tabl
     for r in range(n):
         good = True
         for k in range(cols.size):
-            good &= table[classes[k], rows[r, cols[k]]]
-        m = 0
+            if not table[classes[k], rows[r, cols[k]]]:
+                good = False
+        m = np.int64(0)
         for j in ts_digits:
             m = m * 10 + (np.int64(rows[r, cols[j]]) - 48)
         mantissa[r] = m
-        ch = 0
+        ch = np.int64(0)
         for j in ch_digits:
             ch = ch * 10 + (np.int64(rows[r, cols[j]]) - 48)
         channel[r] = ch
-        ident = 0
+        ident = np.int64(0)
         for j in id_hex:
             ident = (ident << 4) | (np.int64(hex_value[rows[r, cols[j]]]) & 15)
         can_id[r] = ident
