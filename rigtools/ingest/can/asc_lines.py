@@ -14,7 +14,10 @@ ASCII or a tab, and the identifier within 11 bits (29 when extended). Their fiel
 as python-can gives them (:meth:`FrameLines.batch`: the time stamp ``float`` of the text
 plus the measurement start, bit for bit). Every other line (header, comments, events, error
 and remote frames, CAN FD frames, ``base dec`` files, anything odd) is left to python-can and
-the line accounting of :mod:`rigtools.ingest.can.textlog`.
+the line accounting of :mod:`rigtools.ingest.can.textlog`. The lines of one length whose
+first line has such a layout are gathered as a character matrix and read row by row by a
+compiled loop (:func:`~rigtools.ingest.can.text_kernels.parse_asc_rows`), every checked
+column against its class.
 """
 
 from __future__ import annotations

@@ -10,8 +10,9 @@ identifiers with ``CAN_ERR_FLAG`` (0x20000000) are error frames.
 The file is read in blocks of whole lines (:data:`BLOCK_BYTES`). In a block the structural
 characters (``(``, ``)``, spaces, ``#``, ``.``) are located with NumPy, every line gets a layout
 key (the lengths of its fields), and the lines sharing a layout, usually nearly all of them,
-are parsed together as a fixed-width character matrix: digits and hex nibbles through lookup
-tables, timestamps as exact integers divided by a power of ten. Lines the fast path does not
+are parsed together as a fixed-width character matrix, each row read once by a compiled loop
+(:func:`~rigtools.ingest.can.text_kernels.parse_fixed_rows`): digits and hex nibbles checked
+and read, timestamps as exact integers divided by a power of ten. Lines the fast path does not
 recognise go through a line-by-line parser that follows python-can's reader rule for rule; a
 line neither accepts is counted, never skipped silently:
 
