@@ -71,14 +71,8 @@ from typing import BinaryIO, Final
 import deflate
 
 from rigtools.errors import RecordingFormatError
-from rigtools.ingest.can.blf_objects import (
-    LOBJ,
-    LOG_CONTAINER,
-    OBJ_BASE,
-    FrameColumns,
-    ObjectParser,
-    ParseBlock,
-)
+from rigtools.ingest.can.blf_objects import FrameColumns, ObjectParser, ParseBlock
+from rigtools.ingest.can.blf_records import LOBJ, LOG_CONTAINER, OBJ_BASE
 from rigtools.ingest.can.frames import CanFrameBatch
 from rigtools.ingest.can.reader import CanLogReader
 from rigtools.ingest.recording import IngestReport

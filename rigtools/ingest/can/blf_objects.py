@@ -1,87 +1,42 @@
-"""Object-level parsing of BLF log objects: struct layouts and vectorised frame decoding.
+"""Object-level parsing of BLF log objects: the walk over a block and vectorised frame decoding.
 
-The part of :mod:`rigtools.ingest.can.blf` below the container level: the ``LOBJ`` object header
-layouts and the NumPy structured dtypes of ``CAN_MESSAGE`` (1), ``CAN_MESSAGE2`` (86),
-``CAN_FD_MESSAGE`` (100) and ``CAN_FD_MESSAGE_64`` (101), the blocks of decompressed data
-waiting to be parsed, the walk over the object headers of a block and the decoding of the frame
-fields over all objects of a type at once. :mod:`rigtools.ingest.can.blf` streams the containers
-and feeds this module.
+The part of :mod:`rigtools.ingest.can.blf` below the container level: the blocks of
+decompressed data waiting to be parsed, the walk over the object headers of a block and the
+decoding of the frame fields over all objects of a type at once. The object layouts and the
+reading of their fields are :mod:`rigtools.ingest.can.blf_records`;
+:mod:`rigtools.ingest.can.blf` streams the containers and feeds this module.
 """
 
 from __future__ import annotations
 
-import struct
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from decimal import Decimal
 from typing import Any
 
 import numpy as np
 
-from rigtools.ingest.can.blf_kernels import classic_fields, walk_sound_objects
+from rigtools.ingest.can.blf_kernels import walk_sound_objects
+from rigtools.ingest.can.blf_records import (
+    CAN_FD_MESSAGE,
+    CAN_FD_MESSAGE_64,
+    ERROR_TYPES,
+    FRAME_TYPES,
+    HEADER_REST,
+    LOBJ,
+    OBJ_BASE,
+    RECORD_DTYPES,
+    read_records,
+    tick_seconds,
+)
 from rigtools.ingest.can.frames import CanFrameBatch, byte_rows, take_rows
 from rigtools.ingest.recording import IngestReport
 
 __all__ = [
-    "LOBJ",
-    "LOG_CONTAINER",
-    "OBJ_BASE",
     "ContainerOrigin",
     "FrameColumns",
     "ObjectParser",
     "ParseBlock",
 ]
-
-#: The base header of every log object: signature, header size, header version, object size,
-#: object type.
-OBJ_BASE = struct.Struct("<4sHHLL")
-#: Signature at the start of every log object.
-LOBJ = b"LOBJ"
-
-_CAN_MESSAGE = 1
-_CAN_ERROR = 2
-#: Object type of a ``LOG_CONTAINER``.
-LOG_CONTAINER = 10
-_CAN_ERROR_EXT = 73
-_CAN_MESSAGE2 = 86
-_CAN_FD_MESSAGE = 100
-_CAN_FD_MESSAGE_64 = 101
-_CAN_FD_ERROR_64 = 104
-_ERROR_TYPES = frozenset({_CAN_ERROR, _CAN_ERROR_EXT, _CAN_FD_ERROR_64})
-_FRAME_TYPES = frozenset({_CAN_MESSAGE, _CAN_MESSAGE2, _CAN_FD_MESSAGE, _CAN_FD_MESSAGE_64})
-
-# Bytes after the 16-byte base header that python-can unpacks as the object header proper.
-_HEADER_REST = {1: 16, 2: 24}
-
-
-def _record_dtype(obj_type: int, header_version: int) -> np.dtype:
-    """Fields of one object (offsets from the ``LOBJ`` signature), as python-can unpacks them."""
-    b = 16 + _HEADER_REST[header_version]
-    names = ["flags", "ts"]
-    formats: list[object] = ["<u4", "<u8"]
-    offsets = [16, 24]
-    if obj_type in (_CAN_MESSAGE, _CAN_MESSAGE2):  # channel, flags, dlc, id, data[8]
-        names += ["ch", "fl", "dlc", "id", "data"]
-        formats += ["<u2", "u1", "u1", "<u4", ("u1", 8)]
-        offsets += [b, b + 2, b + 3, b + 4, b + 8]
-        size = b + 16
-    elif obj_type == _CAN_FD_MESSAGE:  # ..., fd flags, valid bytes, 5 pad, data[64]
-        names += ["ch", "fl", "dlc", "id", "fdfl", "valid", "data"]
-        formats += ["<u2", "u1", "u1", "<u4", "u1", "u1", ("u1", 64)]
-        offsets += [b, b + 2, b + 3, b + 4, b + 13, b + 14, b + 20]
-        size = b + 84
-    elif obj_type == _CAN_FD_MESSAGE_64:  # channel u8, dlc, valid, txcount, id, ..., flags
-        names += ["ch", "dlc", "valid", "id", "fdfl", "dir", "ext"]
-        formats += ["u1", "u1", "u1", "<u4", "<u4", "u1", "u1"]
-        offsets += [b, b + 1, b + 2, b + 4, b + 12, b + 34, b + 35]
-        size = b + 40
-    else:  # pragma: no cover - only frame types are decoded
-        raise ValueError(obj_type)
-    return np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": size})
-
-
-_DTYPES = {(t, v): _record_dtype(t, v) for t in _FRAME_TYPES for v in (1, 2)}
-
 
 @dataclass
 class ParseBlock:
@@ -202,7 +157,7 @@ class ObjectParser:
                 if j + 16 > n:
                     break
                 _, hs, hv, osize, otype = unpack(buf, j)
-                if hv not in _HEADER_REST or not 16 + _HEADER_REST[hv] <= osize <= max_object:
+                if hv not in HEADER_REST or not 16 + HEADER_REST[hv] <= osize <= max_object:
                     pos = j + 1
                     continue
                 self.resync = False
@@ -327,7 +282,7 @@ class ObjectParser:
         j = buf.find(LOBJ, start, stop)
         while j >= 0 and j + 16 <= len(buf):
             _, _hs, hv, osize, _t = OBJ_BASE.unpack_from(buf, j)
-            if hv in _HEADER_REST and 16 + _HEADER_REST[hv] <= osize <= self.max_object:
+            if hv in HEADER_REST and 16 + HEADER_REST[hv] <= osize <= self.max_object:
                 return j
             j = buf.find(LOBJ, j + 1, stop)
         return -1
@@ -383,16 +338,16 @@ class ObjectParser:
 
             offs = take(offsets)
             where = f"byte {origin_of(int(offs[0]))}"
-            if t in _ERROR_TYPES:
+            if t in ERROR_TYPES:
                 report.reject("error_frame", offs.size, where)
                 continue
-            if v not in _HEADER_REST:
+            if v not in HEADER_REST:
                 report.reject("corrupt_object", offs.size, where)
                 continue
-            if t not in _FRAME_TYPES:
+            if t not in FRAME_TYPES:
                 report.reject(f"blf_object_type_{t}", offs.size, where)
                 continue
-            dt = _DTYPES[(t, v)]
+            dt = RECORD_DTYPES[(t, v)]
             small = take(sizes) < dt.itemsize
             if small.any():
                 report.reject("corrupt_object", int(small.sum()),
@@ -403,7 +358,7 @@ class ObjectParser:
                     continue
                 offs = offsets[idx]
             seq = np.arange(offsets.size) if idx is None else idx
-            rec = _classic(a, offs, v) if t in _CLASSIC else _gather(buf, offs, dt)
+            rec = read_records(buf, offs, t, v)
             got = self._frame_columns(t, v, rec, a, offs, take(sizes, idx), take(hsizes, idx),
                                       origin_of)
             if got is None:
@@ -443,17 +398,17 @@ class ObjectParser:
         def first(mask: np.ndarray) -> str:
             return f"byte {origin_of(int(offs[np.argmax(mask)]))}"
 
-        if t == _CAN_FD_MESSAGE_64:
+        if t == CAN_FD_MESSAGE_64:
             fdfl = rec["fdfl"]
             bad = (fdfl & 0x0010) != 0
             is_fd = (fdfl & 0x1000) != 0
         else:
             bad = (rec["fl"] & 0x80) != 0
-            is_fd = ((rec["fdfl"] & 0x01) != 0 if t == _CAN_FD_MESSAGE
+            is_fd = ((rec["fdfl"] & 0x01) != 0 if t == CAN_FD_MESSAGE
                      else np.zeros(offs.size, bool))
         if bad.any():
             report.reject("remote_frame", int(bad.sum()), first(bad))
-        if t == _CAN_FD_MESSAGE_64:
+        if t == CAN_FD_MESSAGE_64:
             valid = rec["valid"].astype(np.int64)
             over = (valid > 64) & ~bad
             if over.any():
@@ -462,12 +417,12 @@ class ObjectParser:
             ext = rec["ext"].astype(np.int64)
             span = np.where(ext != 0, ext, osz) - hsz - 40
             dfl = np.clip(np.minimum(valid, span), 0, 64)
-            start = offs + (16 + _HEADER_REST[v] + 40)
+            start = offs + (16 + HEADER_REST[v] + 40)
             padded = np.concatenate([a, np.zeros(64, np.uint8)])
             data = byte_rows(padded, start, 64)
             data = np.where(np.arange(64) < dfl[:, None], data, 0).astype(np.uint8)
             length = np.minimum(valid, 64).astype(np.uint8)
-        elif t == _CAN_FD_MESSAGE:
+        elif t == CAN_FD_MESSAGE:
             length = np.minimum(rec["valid"], 64).astype(np.uint8)
             data = rec["data"]
         else:
@@ -506,7 +461,7 @@ class ObjectParser:
                 report.warn(f"{self.path}: BLF channel numbers above 32768 set to -1")
             channel[wide] = -1
         cols = (
-            self._timestamps(flags, ts),
+            tick_seconds(flags, ts, self.start_s),
             (raw_id & 0x1FFFFFFF).astype(np.uint32),
             (raw_id & 0x80000000) != 0,
             np.ascontiguousarray(is_fd),
@@ -515,29 +470,6 @@ class ObjectParser:
             channel.astype(np.int16),
         )
         return keep, cols
-
-    def _timestamps(self, flags: np.ndarray, ts: np.ndarray) -> np.ndarray:
-        """Seconds since the epoch, bit for bit as python-can computes them.
-
-        python-can computes ``float(Decimal(ts) * factor) + start`` with ``factor`` 1e-5 when
-        the object flags equal 1 (10 µs ticks) and 1e-9 otherwise. For ``ts < 2**53`` the
-        float division ``ts / 1e5`` or ``ts / 1e9`` is that same correctly rounded quotient;
-        larger ticks go through :class:`decimal.Decimal` as python-can does.
-        """
-        ten_us = flags == 1
-        if ten_us.all():
-            out = ts.astype(np.float64) / 1e5
-        elif not ten_us.any():
-            out = ts.astype(np.float64) / 1e9
-        else:
-            out = ts.astype(np.float64) / np.where(ten_us, 1e5, 1e9)
-        big = ts >= (1 << 53)
-        if big.any():
-            for i in np.flatnonzero(big).tolist():
-                factor = Decimal("1e-5") if ten_us[i] else Decimal("1e-9")
-                out[i] = float(Decimal(int(ts[i])) * factor)
-        out += self.start_s
-        return out
 
 
 class ContainerOrigin:
@@ -561,32 +493,3 @@ class ContainerOrigin:
                 return np.repeat(self.origins, counts)
             return self.origins[np.searchsorted(self.starts, p, side="right") - 1]
         return int(self.origins[np.searchsorted(self.starts, p, side="right") - 1])
-
-
-_CLASSIC = frozenset({_CAN_MESSAGE, _CAN_MESSAGE2})
-
-
-def _classic(a: np.ndarray, offs: np.ndarray, v: int) -> dict[str, np.ndarray]:
-    """The fields of classic CAN objects as contiguous columns (the names of ``_DTYPES``)."""
-    n = offs.size
-    rec: dict[str, np.ndarray] = {"flags": np.empty(n, np.uint32), "ts": np.empty(n, np.uint64),
-           "ch": np.empty(n, np.uint16), "fl": np.empty(n, np.uint8),
-           "dlc": np.empty(n, np.uint8), "id": np.empty(n, np.uint32),
-           "data": np.empty((n, 8), np.uint8)}
-    classic_fields(a, offs, 16 + _HEADER_REST[v], rec["flags"], rec["ts"], rec["ch"],
-                   rec["fl"], rec["dlc"], rec["id"], rec["data"])
-    return rec
-
-
-def _gather(buf: bytes | bytearray, offs: np.ndarray, dt: np.dtype) -> np.ndarray:
-    """Records of dtype ``dt`` at byte offsets ``offs`` of ``buf`` (strided view when regular)."""
-    w = dt.itemsize
-    if offs.size > 1:
-        stride = int(offs[1] - offs[0])
-        if stride >= w and int(offs[-1] - offs[0]) == stride * (offs.size - 1) and (
-            np.all(np.diff(offs) == stride)
-        ):
-            return np.ndarray((offs.size,), dt, buffer=buf, offset=int(offs[0]),
-                              strides=(stride,))
-    return byte_rows(buf, offs, w).view(dt).reshape(offs.size)
-
