@@ -98,7 +98,7 @@ from rigtools.calibration.runup_likelihood import (
     pointwise_log_likelihood,
     sample_model_error,
 )
-from rigtools.calibration.runup_map import find_runup_map
+from rigtools.calibration.runup_map import SmoothedStart, find_runup_map
 from rigtools.calibration.runup_model import RunUpPosterior, build_posterior
 from rigtools.calibration.runup_outputs import (
     MAX_STORED_DRAWS,
@@ -182,7 +182,8 @@ def _fit_model(post: RunUpPosterior, config: CalibrationConfig, *, seed: int, in
     if walkers < 2 * post.ndim:
         raise CalibrationError(f"{walkers} walkers for {post.ndim} free parameters; emcee "
                                f"needs at least {2 * post.ndim}", key="calibration.runup.walkers")
-    map_est = find_runup_map(post, post.priors, population=walkers, seed=seed)
+    map_est = find_runup_map(post, post.priors, population=walkers, seed=seed,
+                             smoothed=SmoothedStart(post.smoothed_start(), post.profile_errors))
     run = run_sampler(post, post.priors, settings, checkpoint=checkpoint,
                       checkpoint_name=f"runup-{post.kind}",
                       fingerprint=_fingerprint(config, fwd), progress=progress,
