@@ -155,6 +155,9 @@ def find_runup_map(log_prob: Callable[[np.ndarray], np.ndarray], priors: tuple[P
     generations : int
     keep : int
         Distinct optima reported.
+    smoothed : SmoothedStart, optional
+        The columns to hold in the smoothed search and how to profile them; None (or nothing
+        held): no smoothed search.
 
     Returns
     -------
