@@ -16,7 +16,8 @@ exceeds both 4 (differences below about 4 in elpd are small, Sivula et al. 2022)
 ``dse``; otherwise the data cannot tell the variants apart, ``favoured`` is None and the
 statement says so. The largest Pareto ``k`` of each variant is reported: above 0.7 the
 importance sampling for that run is unreliable (the run is very influential, often a run
-near the jam or at the lowest torque) and the statement names the variant. A run whose
+near the jam or at the lowest torque) and the statement names the variant and how many of its
+observations (runs, or a run-up's windows) are affected. A run whose
 log-likelihood is the same for every draw (its peaks are all background under every draw)
 has equal importance weights, so PSIS is exact there; arviz's tail fit returns ``inf`` for
 it, which is not reported as a bad ``k``.
@@ -111,8 +112,10 @@ def compare_variants(idata: Mapping[str, az.InferenceData]) -> ModelComparison:
         loos = {name: az.loo(d, pointwise=True) for name, d in idata.items()}
         table = az.compare(dict(idata), ic="loo") if len(idata) > 1 else None
     variants: dict[str, dict[str, Any]] = {}
+    sizes: dict[str, int] = {}
     for name, loo in loos.items():
         k = np.asarray(loo.pareto_k, dtype=float)
+        sizes[name] = int(k.size)
         ll = np.asarray(_log_likelihood_variable(idata[name]))
         constant = np.ptp(ll.reshape(-1, ll.shape[-1]), axis=0) < 1e-9
         k = np.where(constant, -np.inf, k)     # equal weights: PSIS is exact there
@@ -130,8 +133,11 @@ def compare_variants(idata: Mapping[str, az.InferenceData]) -> ModelComparison:
         variants[name] = row
     ranked = sorted(variants, key=lambda n: variants[n]["rank"])
     bad = [n for n in ranked if variants[n]["n_pareto_k_bad"]]
-    caveat = (f" Pareto k above {PARETO_K_BAD:g} for {', '.join(bad)} (influential runs; "
-              "the elpd of those variants is less certain than its se says)." if bad else "")
+    counts = ", ".join(f"{n} ({variants[n]['n_pareto_k_bad']} of {sizes[n]})"
+                       for n in bad)
+    caveat = (f" Pareto k above {PARETO_K_BAD:g} for {counts} observations (influential ones: "
+              "runs, or windows of a run-up; the elpd of those variants is less certain than "
+              "its se says)." if bad else "")
     if len(ranked) < 2:
         return ModelComparison("psis-loo", variants, ranked[0] if ranked else None,
                                "only one variant fitted; nothing to compare." + caveat)
