@@ -70,7 +70,7 @@ def test_vvms_truth_is_preferred_to_fvms_and_the_outputs_hold_what_the_figure_ne
     for m in v:
         assert (v[m]["n_pareto_k_bad"] > 0) == (v[m]["pareto_k_max"] > 0.7)
         if v[m]["n_pareto_k_bad"]:
-            assert "Pareto k above 0.7 for" in res.comparison.statement
+            assert f"{m} ({v[m]['n_pareto_k_bad']} of 40)" in res.comparison.statement
     assert res.blocked_comparison is not None and "Blocked check" in res.statement
     # item 7: the refused run is reported, not raised
     assert res.refused == {"KB-bad": refusal}
