@@ -7,6 +7,7 @@ time, up then down, and an Arms curve with a resonance; every rule of
 
 from __future__ import annotations
 
+import math
 import pickle
 from pathlib import Path
 
@@ -141,20 +142,47 @@ def test_window_weights_integrate_cubics_against_the_hann_power_weight():
         1 / 12 - 5 / (8 * np.pi ** 2), rel=1e-12)
 
 
+def _time_at_angle(f0: float, slope: float, area: float) -> float:
+    """The ``tau >= 0`` with ``f0 tau + slope tau^2 / 2 = area`` (angle under a linear f_m)."""
+    if slope == 0.0:
+        return area / f0
+    return (-f0 + math.sqrt(f0 * f0 + 2.0 * slope * area)) / slope
+
+
 def test_ramp_windows_carry_the_mesh_frequency_at_their_nodes():
     c = prepare_runup(to_frame(ramp_rows(n=60)), "R", "kb")
     nodes = c.nodes_Hz
     assert nodes.shape == (c.n_points, 3)
-    # windows 0.1 s long, 0.1 s apart: the nodes sit a quarter window (0.025 s) either side,
-    # a quarter of the way to the neighbouring windows on the piecewise-linear f_m(t)
+    # By hand. Windows 0.1 s long, 0.1 s apart, f_m piecewise linear through the window
+    # middles: window i runs from the midpoint value m- = (f[i-1] + f[i]) / 2 to f[i] over its
+    # first half and on to m+ = (f[i] + f[i+1]) / 2 over its second. Its nodes are where it has
+    # turned 1/4, 1/2 and 3/4 of its angle (the integral of f_m; the analysis' Hann window is
+    # in angle), each found by solving the quadratic of the angle under a linear f_m.
     up = np.geomspace(600.0, 1500.0, 60)
-    i = 10
-    assert nodes[i, 1] == pytest.approx(up[i])
-    assert nodes[i, 0] == pytest.approx(up[i] + 0.25 * (up[i - 1] - up[i]))
-    assert nodes[i, 2] == pytest.approx(up[i] + 0.25 * (up[i + 1] - up[i]))
+    i, h = 10, 0.05
+    lo, hi = 0.5 * (up[i - 1] + up[i]), 0.5 * (up[i] + up[i + 1])
+    a1, a2 = h * 0.5 * (lo + up[i]), h * 0.5 * (up[i] + hi)
+    total = a1 + a2
+    expected = []
+    for frac in (0.25, 0.5, 0.75):
+        target = frac * total
+        if target <= a1:
+            tau = _time_at_angle(lo, (up[i] - lo) / h, target)
+            expected.append(lo + (up[i] - lo) / h * tau)
+        else:
+            tau = _time_at_angle(up[i], (hi - up[i]) / h, target - a1)
+            expected.append(up[i] + (hi - up[i]) / h * tau)
+    np.testing.assert_allclose(nodes[i], expected, rtol=1e-8)  # 129-point angle quadrature
+    # the angle weighs the faster second half more: the middle node lies above f[i], and the
+    # nodes a quarter of the way to the neighbours at equal *times* are not the rule
+    assert nodes[i, 1] > up[i] * (1 + 1e-5)
+    assert abs(nodes[i, 0] - (up[i] + 0.25 * (up[i - 1] - up[i]))) > 1e-3 * (up[i] - up[i - 1])
     # on the way down the first node is the higher frequency (time order)
     down = np.flatnonzero(np.array(c.direction) == "down")
     assert np.all(nodes[down, 0] > nodes[down, 2])
+    # the first window: f_m extended linearly before the first middle (not held at f[0])
+    lo0 = up[0] - 0.5 * (up[1] - up[0])
+    assert nodes[0, 0] < up[0] and nodes[0, 0] > lo0
 
 
 def test_speed_steps_keep_their_own_mesh_frequency_at_every_node():
