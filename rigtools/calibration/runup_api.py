@@ -142,6 +142,22 @@ def _q(x: np.ndarray) -> dict[str, float] | None:
     return {"q05": float(q[0]), "q50": float(q[1]), "q95": float(q[2])}
 
 
+def _q_bracket(b: np.ndarray) -> dict[str, float] | None:
+    """Quantiles of a jump that the points place between two neighbours, ``(W, 2)`` (Hz).
+
+    The median of the two neighbours' geometric mean; the 90 % interval from the 5 % quantile
+    of the lower neighbours to the 95 % quantile of the upper ones (a jump is known only to
+    lie between two points, and a zero-width interval would claim more).
+    """
+    v = np.asarray(b, dtype=float).reshape(-1, 2)
+    v = v[np.isfinite(v).all(axis=1)]
+    if not v.size:
+        return None
+    return {"q05": float(np.quantile(v[:, 0], 0.05)),
+            "q50": float(np.quantile(np.sqrt(v[:, 0] * v[:, 1]), 0.5)),
+            "q95": float(np.quantile(v[:, 1], 0.95))}
+
+
 def _fingerprint(config: CalibrationConfig, forward: RunUpForward) -> str:
     h = hashlib.sha256()
     h.update(json.dumps(config.to_dict(), sort_keys=True).encode())
@@ -233,7 +249,8 @@ def _fit_model(post: RunUpPosterior, config: CalibrationConfig, *, seed: int, in
                            axis=0)
         jm = jump_frequencies(y, curve.mesh_frequency_Hz, curve.direction,
                               channels_first=True)
-        jmod = jump_frequencies(sw.log_mu, curve.mesh_frequency_Hz, curve.direction)
+        jmod = jump_frequencies(sw.log_mu, curve.mesh_frequency_Hz, curve.direction,
+                                brackets=True)
         impact = sw.backside_impact.any(axis=1)
         any_impact |= impact
         predictive.append(RunPredictive(
@@ -245,7 +262,7 @@ def _fit_model(post: RunUpPosterior, config: CalibrationConfig, *, seed: int, in
             arms_q05=q[0], arms_q50=q[1], arms_q95=q[2],
             jump_measured_Hz={k: (float(v) if np.isfinite(v) else None)
                               for k, v in jm.items()},
-            jump_model_Hz={k: _q(jmod[k]) for k in DIRECTIONS},
+            jump_model_Hz={k: _q_bracket(jmod[k]) for k in DIRECTIONS},
             backside_impact_probability=float(impact.mean()),
             contact_loss_probability=float(sw.contact_loss.any(axis=1).mean())))
     log_lik = np.concatenate(ll_parts, axis=1).reshape(w, n, -1)

@@ -102,12 +102,16 @@ class RunPredictive:
         ``(C, N)`` posterior predictive quantiles of Arms (m/s^2): model x gain x log-normal
         model error, over the posterior draws.
     jump_measured_Hz : dict
-        ``"up"``/``"down"`` -> mesh frequency of the largest ``|Delta log Arms|`` between
-        neighbouring observed points (the step averaged over the channels observed at
-        both), None when there is none.
+        ``"up"``/``"down"`` -> mesh frequency of the direction's jump between neighbouring
+        observed points (its step out of the hysteresis band:
+        :func:`~rigtools.calibration.runup_forward.jump_frequencies`; the geometric mean of
+        the two points), None when there is none.
     jump_model_Hz : dict
         ``"up"``/``"down"`` -> ``{"q05", "q50", "q95"}`` of the same for the model (gain-free,
-        along the whole path), over the posterior draws; None when there is none.
+        at the points), over the posterior draws: the median of the geometric means, the
+        interval from the 5 % quantile of the lower neighbours to the 95 % quantile of the
+        upper ones (the points place a jump only between two of them); None when no draw
+        jumps.
     backside_impact_probability : float
         Posterior probability of a back-side impact anywhere along this run.
     contact_loss_probability : float

@@ -27,7 +27,7 @@ linear ramp (8-revolution windows spanning 3.4 half-power widths at ``zeta = 0.0
 0.14 % / 0.00 % over seven. On the demo's run-up (its VVMS truth's noiseless DTE acceleration
 along the 2 x 16 s ramp, against the steady sweep's window means), the windows at the
 third-harmonic super-harmonic peak read 1.6 % (up) and 2.2 % (down) low over three bins,
-within 1 % over seven; the two jump windows differ from the steady sweep by 6 % and 14-26 %
+within 1 % over seven; the two jump windows differ from the steady sweep by 5-7 % and 14-26 %
 whatever the band: the ramp's own transient there.
 
 Direction

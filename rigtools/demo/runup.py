@@ -72,6 +72,7 @@ from models.dynamics import SDOFModel, sdof_from_mesh_cycle, sweep
 from models.geometry import GearSet, load_gear_set, mesh_frequency_Hz
 from models.geometry.inertia import pair_equivalent_mass
 from models.stiffness import Harmonics, pair_compliance, prepare_mesh_cycle, tabulate_compliance
+from rigtools.calibration.runup_forward import jump_frequencies
 from rigtools.demo.mcap_writer import write_accel_mcap
 from rigtools.demo.modal_response import add_sensor_noise, quantise
 from rigtools.demo.runup_signal import RunUpResponse, runup_response
@@ -295,12 +296,6 @@ def runup_arms_path(spec: RunUpSpec, z1: int, points: int = 300) -> np.ndarray:
     return np.concatenate([up, up[::-1]])
 
 
-def _largest_jump(f: np.ndarray, arms: np.ndarray) -> float:
-    d = np.abs(np.diff(np.log(arms)))
-    i = int(np.argmax(d))
-    return float(0.5 * (f[i] + f[i + 1]))
-
-
 def runup_truth(spec: RunUpSpec, rm: RunUpModel | None = None, *,
                 points: int = 300) -> RunUpTruth:
     """The truth of the run-up: parameters, ``f_n``, and the steady sweep's jumps and flags.
@@ -308,8 +303,10 @@ def runup_truth(spec: RunUpSpec, rm: RunUpModel | None = None, *,
     The jump frequencies and the flank flags are the model's periodic steady states along the
     ramp's path in time order (:func:`models.dynamics.sweep.sweep`, ``points`` per direction,
     128 steps per period, the state carried through the top), what a calibration's model gives
-    at the true parameters; a jump is the largest step of ``log Arms`` (Arms the housing form
-    ``(2 pi f_m)^2 sqrt(sum h^4 D_h^2)``) within a direction, at the midpoint of its two points.
+    at the true parameters; a jump is where a direction leaves the hysteresis band
+    (:func:`rigtools.calibration.runup_forward.jump_frequencies`, the calibration's own
+    definition, on ``log Arms`` of the housing form ``(2 pi f_m)^2 sqrt(sum h^4 D_h^2)``), at
+    the geometric mean of its two points.
 
     Parameters
     ----------
@@ -335,8 +332,8 @@ def runup_truth(spec: RunUpSpec, rm: RunUpModel | None = None, *,
     arms = (2 * math.pi * path) ** 2 * res.length_scale_m * np.sqrt(
         (h ** 4 * res.amplitudes ** 2).sum(axis=1))
     n = int(points)
-    up = _largest_jump(path[:n], arms[:n])
-    down = _largest_jump(path[n:], arms[n:])
+    jumps = jump_frequencies(np.log(arms), path, np.array(["up"] * n + ["down"] * n, dtype=object))
+    up, down = float(jumps["up"]), float(jumps["down"])
     return RunUpTruth(
         run_id=spec.run_id, gear_set=spec.gear_set, model=rm.model.kind,
         torque_Nm=spec.torque_Nm, zeta=spec.zeta, stiffness_scale=spec.stiffness_scale,

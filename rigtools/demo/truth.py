@@ -441,7 +441,9 @@ class RunUpTruth:
         ``m_e`` (kg).
     pinion_teeth : int
     jump_frequency_up_Hz, jump_frequency_down_Hz : float
-        Mesh frequency of the largest jump of Arms in the up and in the down sweep (Hz).
+        Mesh frequency of the jump of Arms in the up and in the down sweep (Hz): each
+        direction's step out of the hysteresis band
+        (:func:`rigtools.calibration.runup_forward.jump_frequencies`).
     contact_loss, backside_impact : bool
         Whether the drive flanks separate / the back flanks are reached anywhere on the path.
     speed_low_rpm, speed_high_rpm, ramp_duration_s : float
@@ -527,8 +529,10 @@ class RunUpTruth:
                 "backlash": "total 2b on the line of action",
                 "gain": "housing acceleration = G_c x DTE acceleration (flat accelerance); "
                         "harmonic h: a = G_c (2 pi h f_m)^2 D_h",
-                "jump_frequency": "largest step of log Arms in each direction of the model's "
-                                  "periodic steady sweep along the ramp (midpoint, Hz)",
+                "jump_frequency": "each direction's step out of the hysteresis band (the "
+                                  "other direction more than 10 % off) in log Arms of the "
+                                  "model's periodic steady sweep along the ramp, from the "
+                                  "widest band (geometric mean of the two points, Hz)",
                 "pinion_teeth": self.pinion_teeth,
             },
         }

@@ -99,6 +99,11 @@ def test_vvms_truth_is_preferred_to_fvms_and_the_outputs_hold_what_the_figure_ne
     assert inside.mean() > 0.7
     assert set(p.jump_measured_Hz) == {"up", "down"} and set(p.jump_model_Hz) == {"up", "down"}
     assert p.jump_measured_Hz["up"] is not None and p.jump_model_Hz["up"] is not None
+    # the points place a jump between two neighbours: an interval, not a point, around it
+    for d in ("up", "down"):
+        j, m = p.jump_model_Hz[d], p.jump_measured_Hz[d]
+        assert j is not None and m is not None
+        assert j["q05"] < j["q50"] < j["q95"] and j["q05"] < m < j["q95"]
     # pointwise log-likelihood: one per observed (run, point), its channels together
     assert res.fits["vvms"].log_likelihood.shape[-1] == 40
     assert res.fits["vvms"].arms_predictive.shape[-1] == 3 * 40

@@ -230,23 +230,51 @@ def test_acceleration_arms_weights_harmonic_h_by_h_to_the_fourth() -> None:
 
 
 def test_jump_frequencies_per_direction() -> None:
-    f = np.array([1.0, 2.0, 3.0, 4.0, 4.0, 3.0, 2.0, 1.0]) * 1000.0
-    direction = np.array(["up"] * 4 + ["down"] * 4, dtype=object)
-    y = np.log(np.array([[1.0, 1.2, 5.0, 1.1, 1.0, 3.0, 0.9, 0.8],
-                         [1.0, 4.0, 4.1, 4.2, 4.0, 3.0, 2.9, 0.5]]))
+    # A softening resonance by hand: up and down on one grid (kHz), both with a steep peak
+    # at 2 kHz that has no hysteresis (the largest step of all, 1 -> 20); the down curve
+    # stays high at 5 and 4 kHz where the up curve is low (the band), so the up sweep leaves
+    # the band between 5 and 6 kHz, the down sweep between 4 and 3 kHz.
+    f = np.array([1, 2, 3, 4, 5, 6, 7, 7, 6, 5, 4, 3, 2, 1], dtype=float) * 1000.0
+    direction = np.array(["up"] * 7 + ["down"] * 7, dtype=object)
+    up = [1.0, 20.0, 1.5, 2.0, 2.5, 8.0, 3.0]
+    down = [3.0, 8.0, 9.0, 10.0, 1.55, 20.0, 1.0]   # 7 -> 1 kHz; 1.55 vs 1.5: 3 %, no band
+    flat = [1.0, 20.0, 1.5, 2.0, 2.5, 8.0, 3.0]
+    y = np.log(np.array([up + down, flat + flat[::-1]]))
     j = jump_frequencies(y, f, direction)
-    # row 0 up: |log(1.1 / 5)| beats log(5 / 1.2); row 1 up: 1 -> 4
-    np.testing.assert_allclose(j["up"], [math.sqrt(3000.0 * 4000.0),
-                                         math.sqrt(1000.0 * 2000.0)])
-    np.testing.assert_allclose(j["down"], [math.sqrt(3000.0 * 2000.0),
-                                           math.sqrt(2000.0 * 1000.0)])
-    # measured curves: steps averaged over the channels observed at both points
-    y2 = y.copy()
-    y2[1, 1] = np.nan        # channel 2's 1 -> 4 step is gone; 2 -> 3 kHz is channel 1's
-    both = jump_frequencies(y2, f, direction, channels_first=True)   # 1.43, 3 -> 4 kHz 0.75
-    assert both["up"] == pytest.approx(math.sqrt(2000.0 * 3000.0))
-    assert both["down"] == pytest.approx(math.sqrt(2000.0 * 1000.0))
-    none = jump_frequencies(y[0], f, np.array(["hold"] * 8, dtype=object))
+    np.testing.assert_allclose(j["up"][0], math.sqrt(5000.0 * 6000.0))
+    np.testing.assert_allclose(j["down"][0], math.sqrt(4000.0 * 3000.0))
+    # no hysteresis, no jump, however steep the peak
+    assert np.isnan(j["up"][1]) and np.isnan(j["down"][1])
+    b = jump_frequencies(y, f, direction, brackets=True)
+    np.testing.assert_array_equal(b["up"][0], [5000.0, 6000.0])
+    np.testing.assert_array_equal(b["down"][0], [3000.0, 4000.0])
+    assert b["up"].shape == (2, 2) and np.isnan(b["up"][1]).all()
+    # two bands: a narrow one (20 % apart, at 2 kHz) with the larger step, and the wide one:
+    # the jump leaves the widest
+    up2 = [1.0, 20.0, 1.5, 2.0, 2.5, 8.0, 3.0]
+    down2 = [3.0, 8.0, 9.0, 10.0, 1.55, 24.0, 1.0]  # 24 vs 20 at 2 kHz: 18 % apart
+    y2 = np.log(np.array(up2 + down2))
+    j2 = jump_frequencies(y2, f, direction)
+    assert j2["up"] == pytest.approx(math.sqrt(5000.0 * 6000.0))
+    assert j2["down"] == pytest.approx(math.sqrt(4000.0 * 3000.0))
+    # measured curves: channels with their own gains (the differences cancel them), steps
+    # and differences averaged over the channels observed at both points
+    ch = np.stack([y[0], y[0] + math.log(0.3)])
+    ch[0, 4] = np.nan                        # channel 1 misses the up point at 5 kHz
+    both = jump_frequencies(ch, f, direction, channels_first=True)
+    assert both["up"] == pytest.approx(math.sqrt(5000.0 * 6000.0))
+    assert both["down"] == pytest.approx(math.sqrt(4000.0 * 3000.0))
+    # the other direction interpolated in ln f_m: down points between the up points, its
+    # peak at 2.1 kHz (the up one's at 2): one-point bands at the peak (the interpolation cuts
+    # its top) lose to the two-point band over the fold
+    fd = np.array([6.5, 5.5, 4.5, 3.5, 2.5, 2.1, 1.5]) * 1000.0
+    f3 = np.r_[f[:7], fd]
+    d3 = np.array(["up"] * 7 + ["down"] * 7, dtype=object)
+    y3 = np.log(np.r_[up, [7.2, 9.0, 9.5, 1.7, 1.6, 16.0, 1.2]])
+    j3 = jump_frequencies(y3, f3, d3, brackets=True)
+    np.testing.assert_array_equal(j3["up"], [5000.0, 6000.0])
+    np.testing.assert_array_equal(j3["down"], [3500.0, 4500.0])
+    none = jump_frequencies(y[0], f, np.array(["hold"] * 14, dtype=object))
     assert np.isnan(none["up"]) and np.isnan(none["down"])
 
 
