@@ -85,14 +85,14 @@ prominence_dB = 60.0
 
 [[run]]
 id = "ramp"
-file = "ramp.mcap"
+gear_set = "kahraman-blankenship"   # z1 = 50
 torque_Nm = 300.0
-gear_set = "kahraman-blankenship"
+file = "ramp.mcap"
 """
 
 
 @pytest.fixture(scope="module")
-def observed(tmp_path_factory) -> pd.DataFrame:
+def ramp_table(tmp_path_factory) -> pd.DataFrame:
     """The project's path: MCAP, logged speed (100 Hz, 0.1 rpm noise), observe_campaign."""
     d = tmp_path_factory.mktemp("ramp_windows")
     t, x = signal(0.02, 0.002, seed=0)
@@ -107,10 +107,10 @@ def observed(tmp_path_factory) -> pd.DataFrame:
     return obs.table
 
 
-def test_the_models_window_value_reads_back_the_analysed_windows(observed):
+def test_the_models_window_value_reads_back_the_analysed_windows(ramp_table):
     # harmonic 1's resonance (zeta 0.02, half-power width 36 Hz) lies inside windows spanning
     # 60 Hz of f_m near it; the slow windows span up to 40 % of f_m, where Arms grows as f_m^2
-    (curve,) = prepare_runups(observed, {"ramp": "kahraman-blankenship"},
+    (curve,) = prepare_runups(ramp_table, {"ramp": "kahraman-blankenship"},
                               RunUpSettings(max_speed_points=1000)).curves
     ok = np.isfinite(curve.observed[0])
     nodes = curve.nodes_Hz[ok]
@@ -124,7 +124,7 @@ def test_the_models_window_value_reads_back_the_analysed_windows(observed):
     assert np.max(np.abs(err)) < 0.01
     # Contrast, so the test can fail: nodes at equal fractions of the window's *duration*
     # (the rule before) leave the slow windows' value 0.5-1 % under the analysed one.
-    rows = observed[(observed.quantity == "arms") & (observed.status != "failed")]
+    rows = ramp_table[(ramp_table.quantity == "arms") & (ramp_table.status != "failed")]
     rows = rows.sort_values("step_start_s")
     t0, t1 = rows.step_start_s.to_numpy(), rows.step_stop_s.to_numpy()
     mid = 0.5 * (t0 + t1)
