@@ -119,6 +119,7 @@ __all__ = [
     "calibrate_runup_data",
     "calibrate_runups",
     "loo_blocks",
+    "runup_loo_data",
 ]
 
 #: The chains' checkpoint file in ``<outdir>/runup/``.
@@ -311,7 +312,13 @@ def loo_blocks(direction: np.ndarray) -> np.ndarray:
     return out
 
 
-def _loo_data(fit: RunUpFit, *, blocked: bool) -> az.InferenceData:
+def runup_loo_data(fit: RunUpFit, *, blocked: bool = False) -> az.InferenceData:
+    """What PSIS-LOO compares of a fit: its log posterior and pointwise log-likelihood.
+
+    ``blocked``: the left-out densities of :func:`loo_blocks`' blocks instead of one per
+    (run, point); for :func:`~rigtools.calibration.comparison.compare_variants` (module
+    notes, step 5), also across fits of separate calls.
+    """
     ll = fit.block_log_likelihood if blocked else fit.log_likelihood
     with warnings.catch_warnings():
         # "more chains than draws": emcee has many walkers and few thinned draws each
@@ -429,8 +436,8 @@ def calibrate_runup_data(
     if not fits:
         raise CalibrationError("no SDOF model could be fitted: " + "; ".join(warns),
                                key="calibration.models")
-    point = compare_variants({m: _loo_data(f, blocked=False) for m, f in fits.items()})
-    block = (compare_variants({m: _loo_data(f, blocked=True) for m, f in fits.items()})
+    point = compare_variants({m: runup_loo_data(f) for m, f in fits.items()})
+    block = (compare_variants({m: runup_loo_data(f, blocked=True) for m, f in fits.items()})
              if len(fits) > 1 else None)
     result = RunUpResult(
         models=tuple(fits), fits=fits, comparison=point, blocked_comparison=block,

@@ -4,14 +4,16 @@ Synthetic data: the plain per-walker sweep (``sweep_walkers_reference``, not the
 kernel the calibration uses) of a known model, times a gain per channel, with log-normal
 noise (:func:`sbc_runup.simulate_curve`). The default suite runs reduced versions (one
 torque, 20 points per direction, 10 walkers, a few dozen steps: the chains are not converged,
-which the result flags); the slow tests run the full ones (three torques, all three models,
-sampled to convergence).
+which the result flags); the slow test runs the full one (three torques, the three models,
+VVMS and LSTE sampled to convergence, FVMS for a capped number of steps: its docstring says
+why).
 """
 
 from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -20,7 +22,8 @@ from sbc_runup import GEAR_SET, Settings, config_for, simulate_curve
 from models.dynamics.walkers import cycle_bank
 from models.geometry import load_gear_set
 from rigtools.calibration import CalibrationError, default_config
-from rigtools.calibration.runup_api import calibrate_runup_data
+from rigtools.calibration.comparison import compare_variants
+from rigtools.calibration.runup_api import calibrate_runup_data, runup_loo_data
 from rigtools.calibration.runup_data import RunUpData
 from rigtools.calibration.runup_outputs import RUNUP_DIR, RunUpResult
 from rigtools.calibration.runup_summary import NO_BACKSIDE_STATEMENT
@@ -143,27 +146,52 @@ def test_no_usable_runup_is_an_error_only_when_models_are_asked_for() -> None:
     assert "no SDOF models" in empty.statement
 
 
-@pytest.mark.slow
-def test_vvms_runups_at_three_torques_full() -> None:
-    """Issue 20 item 3: three torques, all three models, sampled to convergence."""
+#: Steps FVMS, the wrong model, is sampled for in the full test (module notes of the test).
+FVMS_STEPS = 3000
+
+
+def three_torques(settings: Settings, wrong_steps: int, points: int = 50) -> tuple:
+    """VVMS run-ups at 100/200/300 N m; VVMS and LSTE fitted with ``settings``, FVMS capped.
+
+    Returns ``(result of vvms and lste, result of fvms, their PSIS-LOO comparison, f_n)``.
+    """
     bank = cycle_bank(_pair(), 200.0, "vvms")
     true_fn = float(bank.natural_frequency_Hz(TRUTH["stiffness_scale"]))
     curves = tuple(simulate_curve("vvms", t, zeta=TRUTH["zeta"],
                                   stiffness_scale=TRUTH["stiffness_scale"],
                                   gains=TRUTH["gains"], model_error=TRUTH["model_error"],
                                   channel_error=TRUTH["channel_error"], seed=10 + i,
-                                  points_per_direction=50, run_id=f"KB-{t:g}")
+                                  points_per_direction=points, run_id=f"KB-{t:g}")
                    for i, t in enumerate((100.0, 200.0, 300.0)))
-    res = _fit(curves, ("fvms", "vvms", "lste"), Settings(), fixed_backlash=False)
-    v = res.comparison.variants
+    right = _fit(curves, ("vvms", "lste"), settings, fixed_backlash=False)
+    wrong = _fit(curves, ("fvms",), replace(settings, max_steps=wrong_steps),
+                 fixed_backlash=False)
+    fits = {**right.fits, **wrong.fits}
+    comparison = compare_variants({m: runup_loo_data(f) for m, f in fits.items()})
+    return right, wrong, comparison, true_fn
+
+
+@pytest.mark.slow
+def test_vvms_runups_at_three_torques_full() -> None:
+    """Issue 20 item 3: three torques, the three models, VVMS and LSTE to convergence.
+
+    FVMS is the wrong model here, and its posterior on VVMS data is misspecified and
+    multimodal (a backlash of a few um against the wide-gap plateau): in session 14 it was
+    still not converged after 7800 steps and 85 minutes of sampling, so with the default cap
+    of 20000 steps the test would not end in a working day. It is sampled for
+    :data:`FVMS_STEPS`; its elpd then rests on unconverged chains, and the test asks for the
+    best of VVMS and LSTE to lead it by more than four standard errors of the difference.
+    """
+    right, _, comparison, true_fn = three_torques(Settings(), FVMS_STEPS)
+    v = comparison.variants
     best = max(("vvms", "lste"), key=lambda m: v[m]["elpd_loo"])
     diff = v[best]["elpd_loo"] - v["fvms"]["elpd_loo"]
     print(f"{best} - fvms: elpd difference {diff:.1f} (dse {v['fvms']['dse']:.1f}); Pareto k "
           f"max {[v[m]['pareto_k_max'] for m in ('fvms', 'vvms', 'lste')]}")
-    print(res.statement)
-    assert diff > 0
-    s = res.fits["vvms"].summary
-    assert res.fits["vvms"].converged
+    print(comparison.statement)
+    assert diff > 4 * v["fvms"]["dse"]
+    s = right.fits["vvms"].summary
+    assert right.fits["vvms"].converged
     z = s["parameters"]["zeta"]
     assert z["q05"] <= TRUTH["zeta"] <= z["q95"]
     fn = s["derived"]["mesh_natural_frequency_Hz"]
