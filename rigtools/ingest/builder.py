@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rigtools.errors import RecordingFormatError
+from rigtools.ingest.conversion import convert_into
 from rigtools.ingest.recording import (
     Channel,
     Gap,
@@ -387,12 +388,12 @@ class RecordingBuilder:
             if clean and (bs.shape[0] == 1 or np.all(np.diff(bs) == k)):
                 lo = int(bs[0])
                 dst = values[lo : lo + b.raw.size]
-                _convert_into(b.raw.reshape(-1), conv, dst)
+                convert_into(b.raw.reshape(-1), conv, dst)
                 if not complete:
                     valid[lo : lo + b.raw.size] = True
                 continue
             conv_rows = np.empty(b.raw.shape, np.float64)
-            _convert_into(b.raw, conv, conv_rows)
+            convert_into(b.raw, conv, conv_rows)
             full = bskip == 0
             if full.any():
                 pos = bs[full][:, None] + np.arange(k)
@@ -489,19 +490,6 @@ def _join(blocks: list[np.ndarray]) -> np.ndarray:
     out = blocks[0] if len(blocks) == 1 else np.concatenate(blocks)
     blocks.clear()
     return out
-
-
-def _convert_into(raw: np.ndarray, conversion: tuple[tuple[float, float], ...],
-                  out: np.ndarray) -> None:
-    """``out[...] = raw`` as float64, then each ``(scale, offset)`` stage applied in place."""
-    with np.errstate(invalid="ignore"):  # signalling NaNs in float32 payloads stay NaN
-        np.copyto(out, raw, casting="unsafe")
-    for scale, offset in conversion:
-        if scale == 1.0 and offset == 0.0:
-            continue
-        # Same operations as rigtools.ingest.can.dbc.decode_signal, so results match bit for bit.
-        np.multiply(out, scale, out=out)
-        np.add(out, offset, out=out)
 
 
 #: A block whose rows break contiguity more often than this stays a table of rows.

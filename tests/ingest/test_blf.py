@@ -295,6 +295,65 @@ def test_hand_built_objects_v2_headers_10us_ticks_and_padding_match_python_can()
     assert len(batch) == 9 and report.n_rejected == 0
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_plain_frames_decoded_by_the_walk_equal_the_numpy_decoding(seed, monkeypatch):
+    """Every limit of a *plain* frame (decoded inside the compiled walk) on either side.
+
+    Classic objects of both types and header versions, 10 µs and 1 ns ticks, ticks on both
+    sides of 2**53, channel numbers 0, 1, 32768 and 32769 (the last set to -1 with a
+    warning), DLC 0-8, 9-15 and 16-255 (a warning), remote frames, objects one byte short of
+    their record (corrupt), CAN FD and error objects between them, containers of 37 bytes
+    to 4 kB. The frames, positions and report equal those of the compiled walk that leaves
+    every frame to the NumPy decoding of its type; without the short objects (which
+    python-can reads past), the frames equal python-can's, channel 32769 aside.
+    """
+    from rigtools.ingest.can import blf_objects
+
+    rng = np.random.default_rng(seed)
+    objs, short = [], []
+    for i in range(2500):
+        kind = rng.integers(0, 20)
+        ts = int(rng.choice([i * 10_007, (1 << 53) - 1 - i, (1 << 53) + i]))
+        short.append(kind == 5)
+        if kind == 0:
+            objs.append(_fd(0x200 + i % 7, bytes(rng.integers(0, 256, 12, dtype=np.uint8)),
+                            ts=i))
+            continue
+        if kind == 1:
+            objs.append(_error_ext(ts=i))
+            continue
+        dlc = int(rng.choice([0, 3, 8, 9, 15, 16, 255])) if kind == 2 else int(
+            rng.integers(0, 9))
+        ch = int(rng.choice([0, 1, 2, 32768, 32769])) if kind == 3 else 1
+        flags = 0x80 if kind == 4 else int(rng.integers(0, 0x80))
+        body = struct.pack("<HBBL8s", ch, flags, dlc, int(rng.integers(0, 1 << 32)),
+                           bytes(rng.integers(0, 256, 8, dtype=np.uint8)))
+        if kind == 5:
+            body = body[:-1]  # one byte short of the record: corrupt_object
+        objs.append(_obj(int(rng.choice([1, 86])), body, ts=ts, flags=int(rng.choice([1, 2])),
+                         hv=int(rng.integers(1, 3))))
+    chunk = int(rng.choice([37, 500, 4096]))
+    raw = _blf(b"".join(objs), chunk=chunk)
+    fast, fast_report = read_blf(raw)
+    with monkeypatch.context() as m:
+        m.setattr(blf_objects, "walk_sound_objects", _compiled_walk_only)
+        slow, slow_report = read_blf(raw)
+    assert fast.equals(slow, compare_position=True)
+    assert np.array_equal(fast.channel, slow.channel)
+    assert fast_report.to_dict() == slow_report.to_dict()
+    assert {"remote_frame", "corrupt_object", "error_frame"} <= set(fast_report.rejected)
+    assert any("DLC above 15" in w for w in fast_report.warnings)
+    assert any("above 32768" in w for w in fast_report.warnings)
+
+    sound = _blf(b"".join(o for o, cut in zip(objs, short, strict=True) if not cut),
+                 chunk=chunk)
+    batch, _ = read_blf(sound)
+    msgs = data_frames(pycan_messages(sound))
+    for msg in msgs:
+        msg.channel = msg.channel if msg.channel <= 32767 else -1
+    assert_same_frames(batch, msgs)
+
+
 def test_runs_of_equal_objects_and_mixed_traffic_give_the_same_frames():
     """The arithmetic fast path (long runs) and the object-by-object walk agree."""
     rng = np.random.default_rng(5)
@@ -586,17 +645,26 @@ def test_other_container_padding_is_tolerated_with_a_warning(extra):
     assert any("unexpected padding" in w for w in report.warnings)
 
 
-def _no_compiled_walk(buf, pos, max_object, out, filled):
-    return 0, pos
+def _no_compiled_walk(buf, pos, max_object, out, filled, *decoding):
+    return 0, 0, pos
+
+
+def _compiled_walk_only(buf, pos, max_object, out, filled, decode, *rest):
+    from rigtools.ingest.can.blf_kernels import walk_sound_objects
+
+    return walk_sound_objects(buf, pos, max_object, out, filled, False, *rest)
 
 
 @pytest.mark.parametrize("seed", [0, 1])
-def test_compiled_walk_equals_the_python_walk_on_damaged_files(seed, monkeypatch):
+@pytest.mark.parametrize("slower", [_no_compiled_walk, _compiled_walk_only])
+def test_compiled_walk_equals_the_python_walk_on_damaged_files(seed, slower, monkeypatch):
     """Same frames, positions and report with and without the compiled object walk.
 
     Every damage of the damaged-file corpus (truncations, flipped bytes, moved and repeated
     containers, lying sizes) applied to a python-can file of mixed traffic, small
-    containers so that objects straddle them.
+    containers so that objects straddle them. Compared: the compiled walk decoding the plain
+    frames on the way (as ``read`` does) against the Python walk alone, and against the
+    compiled walk that leaves every frame to the NumPy decoding of its type.
     """
     from make_damaged_corpus import damages_for
 
@@ -618,7 +686,7 @@ def test_compiled_walk_equals_the_python_walk_on_damaged_files(seed, monkeypatch
         return batch, report.to_dict()
 
     fast = {name: frames(raw) for name, raw in files.items()}
-    monkeypatch.setattr(blf_objects, "walk_sound_objects", _no_compiled_walk)
+    monkeypatch.setattr(blf_objects, "walk_sound_objects", slower)
     for name, raw in files.items():
         slow = frames(raw)
         if isinstance(slow[0], str):

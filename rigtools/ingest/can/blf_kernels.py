@@ -9,6 +9,9 @@ object ends inside the block, and another signature follows within 8 bytes of it
 the block ends within 8 bytes). It stops at the first object that does not pass, where the
 Python walk takes over (a damaged header, a size that lies, an object cut at the block end)
 and decides what it is, as before; it never accepts an object the Python walk would refuse.
+On the way it decodes the *plain* classic CAN frames (the common case: a data frame with
+nothing to report) straight into frame columns, each object's bytes read once; every other
+object is left to the NumPy decoding of its type, which reports and warns as before.
 
 :func:`classic_fields` reads the fields of the classic CAN messages found into contiguous
 columns, each object's bytes once, instead of NumPy fields of a strided record view.
@@ -19,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["classic_fields", "walk_sound_objects"]
+__all__ = ["classic_fields", "plain_frame_columns", "walk_sound_objects"]
 
 
 @njit(cache=True, nogil=True)
@@ -46,10 +49,16 @@ def _u32(buf: np.ndarray, j: int) -> np.int64:  # pragma: no cover - compiled
     return _u16(buf, j) | (_u16(buf, j + 2) << 16)
 
 
+#: Ticks from this on are converted through :class:`decimal.Decimal`, as python-can does.
+_BIG_TICK = np.uint64(1 << 53)
+
+
 @njit(cache=True, nogil=True)
 def walk_sound_objects(buf: np.ndarray, pos: int, max_object: int, out: np.ndarray,
-                       filled: int) -> tuple[int, int]:  # pragma: no cover - compiled
-    """Walk the sound objects of ``buf`` from byte ``pos``.
+                       filled: int, decode: bool, seg_starts: np.ndarray,
+                       seg_origins: np.ndarray, start_s: float, frames: tuple,
+                       n_frames: int) -> tuple[int, int, int]:  # pragma: no cover - compiled
+    """Walk the sound objects of ``buf`` from byte ``pos``; decode the plain frames on the way.
 
     Parameters
     ----------
@@ -60,18 +69,45 @@ def walk_sound_objects(buf: np.ndarray, pos: int, max_object: int, out: np.ndarr
     max_object : int
         Largest object size accepted (bytes).
     out : numpy.ndarray
-        int64 ``(capacity, 5)``: per object its offset, type, header version, object size
-        and header size, written from row ``filled`` on; the walk stops when it is full.
+        int64 ``(capacity, 5)``: per object not decoded here its offset, type, header
+        version, object size and header size, written from row ``filled`` on.
     filled : int
         Rows of ``out`` already used.
+    decode : bool
+        Decode plain frames into ``frames`` (else every object goes to ``out``).
+    seg_starts, seg_origins : numpy.ndarray
+        int64, the block offset where each container's data starts and that container's
+        file offset (the frames' positions).
+    start_s : float
+        The file's start time (s since the epoch).
+    frames : tuple of numpy.ndarray
+        The columns of the plain frames (:func:`plain_frame_columns`), written from row
+        ``n_frames`` on.
+    n_frames : int
+        Rows of ``frames`` already used.
 
     Returns
     -------
     tuple of int
-        The number of objects walked and the position after the last of them.
+        The objects added to ``out``, the frames added to ``frames`` and the position after
+        the last object walked. The walk stops when ``out`` or ``frames`` is full.
+
+    Notes
+    -----
+    A *plain frame* is a ``CAN_MESSAGE`` or ``CAN_MESSAGE2`` object of header version 1 or 2,
+    at least its record's size, no remote frame, DLC at most 15, a tick below 2**53 and a
+    channel number of at most 32768: its columns are exactly those
+    :meth:`~rigtools.ingest.can.blf_objects.ObjectParser` computes with NumPy (timestamp
+    ``float(ticks) / 1e5`` for object flags 1, else ``/ 1e9``, plus the start time; the 29
+    identifier bits and the extended flag; DLC capped at 8 and the data bytes beyond it zero;
+    the channel number minus one). Every other object (remote and error frames, CAN FD, any
+    rarity the NumPy path reports or warns about) goes to ``out`` for that path.
     """
     n = buf.size
     k = filled
+    m = n_frames
+    off_col, pos_col, ts_col, id_col, ext_col, len_col, data_col, ch_col = frames
+    seg = max(0, int(np.searchsorted(seg_starts, pos, side="right")) - 1)
     while k < out.shape[0]:
         j = _find_signature(buf, pos, min(pos + 8, n))
         if j < 0 or j + 16 > n:
@@ -84,14 +120,52 @@ def walk_sound_objects(buf: np.ndarray, pos: int, max_object: int, out: np.ndarr
             break
         if end + 8 <= n and _find_signature(buf, end, end + 8) < 0:
             break
-        out[k, 0] = j
-        out[k, 1] = _u32(buf, j + 12)
-        out[k, 2] = _u16(buf, j + 6)
-        out[k, 3] = osize
-        out[k, 4] = _u16(buf, j + 4)
-        k += 1
+        otype = _u32(buf, j + 12)
+        hv = _u16(buf, j + 6)
+        plain = False
+        if decode and (otype == 1 or otype == 86) and (hv == 1 or hv == 2):
+            b = j + (32 if hv == 1 else 40)
+            if osize >= b - j + 16:
+                ticks = np.uint64(_u32(buf, j + 24)) | (np.uint64(_u32(buf, j + 28))
+                                                         << np.uint64(32))
+                ch = _u16(buf, b)
+                plain = bool((buf[b + 2] & 0x80) == 0 and buf[b + 3] <= 15
+                             and ticks < _BIG_TICK and ch <= 32768)
+        if plain:
+            if m == off_col.size:
+                break
+            while seg + 1 < seg_starts.size and seg_starts[seg + 1] <= j:
+                seg += 1
+            off_col[m] = j
+            pos_col[m] = seg_origins[seg]
+            t = np.float64(ticks)
+            ts_col[m] = (t / 1e5 if _u32(buf, j + 16) == 1 else t / 1e9) + start_s
+            raw = _u32(buf, b + 4)
+            id_col[m] = raw & 0x1FFFFFFF
+            ext_col[m] = (raw & 0x80000000) != 0
+            length = min(int(buf[b + 3]), 8)
+            len_col[m] = length
+            for q in range(8):
+                data_col[m, q] = buf[b + 8 + q] if q < length else 0
+            ch_col[m] = ch - 1
+            m += 1
+        else:
+            out[k, 0] = j
+            out[k, 1] = otype
+            out[k, 2] = hv
+            out[k, 3] = osize
+            out[k, 4] = _u16(buf, j + 4)
+            k += 1
         pos = end
-    return k - filled, pos
+    return k - filled, m - n_frames, pos
+
+
+def plain_frame_columns(capacity: int) -> tuple[np.ndarray, ...]:
+    """Empty columns for ``capacity`` plain frames (see :func:`walk_sound_objects`)."""
+    return (np.empty(capacity, np.int64), np.empty(capacity, np.int64),
+            np.empty(capacity, np.float64), np.empty(capacity, np.uint32),
+            np.empty(capacity, np.bool_), np.empty(capacity, np.uint8),
+            np.empty((capacity, 8), np.uint8), np.empty(capacity, np.int16))
 
 
 @njit(cache=True, nogil=True)

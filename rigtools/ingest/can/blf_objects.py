@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from rigtools.ingest.can.blf_kernels import walk_sound_objects
+from rigtools.ingest.can.blf_kernels import plain_frame_columns, walk_sound_objects
 from rigtools.ingest.can.blf_records import (
     CAN_FD_MESSAGE,
     CAN_FD_MESSAGE_64,
@@ -108,16 +108,21 @@ class ObjectParser:
         self.warned_dlc = False
         self.warned_channel = False
         self.stop = 0
+        self.plain: tuple[np.ndarray, ...] | None = None
 
     # -- walking object headers --------------------------------------------------------------
     def walk(
-        self, buf: bytes | bytearray, origin_of: ContainerOrigin, final: bool = True
+        self, buf: bytes | bytearray, origin_of: ContainerOrigin, final: bool = True,
+        decode: bool = False,
     ) -> tuple[np.ndarray, ...] | None:
         """Locate the complete objects of ``buf``.
 
         Returns the offsets, types, header versions, object sizes and header sizes of the
         objects found (None when there is none) and sets ``self.stop`` to where the unfinished
-        remainder begins. The walk goes object by object, as python-can does: the next
+        remainder begins. With ``decode``, the plain classic frames the compiled walk meets
+        are decoded on the way into ``self.plain`` (block offset, position, timestamp,
+        identifier, extended flag, length, data, channel; None when there is none) and left
+        out of the objects returned. The walk goes object by object, as python-can does: the next
         ``LOBJ`` must start within 8 bytes of the end of the previous object (padding). Sound
         objects are walked by a compiled loop
         (:func:`~rigtools.ingest.can.blf_kernels.walk_sound_objects`); where it stops, this
@@ -138,15 +143,23 @@ class ObjectParser:
         short_runs = 0  # short runs in a row: the object-by-object stretch after one doubles
         max_object = self.max_object
         arr = np.frombuffer(buf, np.uint8)
-        # objects the compiled walk took (a classic CAN object takes 48 bytes; grown if full)
-        sound = np.empty((n // 40 + 16, 5), np.int64)
-        n_sound = 0
+        # objects the compiled walk took (a classic CAN object takes 48 bytes; grown if full):
+        # the plain frames it decoded, the other objects' headers
+        frames = plain_frame_columns(n // 40 + 16 if decode else 0)
+        sound = np.empty((n // (400 if decode else 40) + 16, 5), np.int64)
+        n_sound = n_frames = 0
         while True:
             if not self.resync:
-                got, pos = walk_sound_objects(arr, pos, max_object, sound, n_sound)
+                got, got_frames, pos = walk_sound_objects(
+                    arr, pos, max_object, sound, n_sound, decode, origin_of.starts,
+                    origin_of.origins, self.start_s, frames, n_frames)
                 n_sound += got
+                n_frames += got_frames
                 if n_sound == sound.shape[0]:
                     sound = np.concatenate([sound, np.empty_like(sound)])
+                    continue
+                if decode and n_frames == frames[0].shape[0]:
+                    frames = tuple(np.concatenate([c, np.empty_like(c)]) for c in frames)
                     continue
             if self.resync:
                 j = find(LOBJ, pos)
@@ -245,6 +258,7 @@ class ObjectParser:
             kinds.append((otype, hv, osize, hs))
             pos = j + stride * (count - 1) + osize
         self.stop = pos
+        self.plain = tuple(c[:n_frames] for c in frames) if n_frames else None
         walked = self._runs(starts, strides, counts, kinds)
         if n_sound == 0:
             return walked
@@ -298,9 +312,8 @@ class ObjectParser:
         buf = block.parts[0] if len(block.parts) == 1 else b"".join(block.parts)
         origin_of = ContainerOrigin(np.asarray(block.starts, np.int64),
                             np.asarray(block.origins, np.int64))
-        walked = self.walk(buf, origin_of, final)
-        if walked is not None:
-            self._decode(buf, walked, origin_of, out)
+        walked = self.walk(buf, origin_of, final, decode=True)
+        self._decode(buf, walked, origin_of, out)
         rest = ParseBlock()
         if self.stop < len(buf):
             tail = buf[self.stop :]
@@ -316,8 +329,42 @@ class ObjectParser:
                     rest.need = j + OBJ_BASE.unpack_from(tail, j)[3]
         return rest
 
-    def _decode(self, buf: bytes | bytearray, walked: tuple[np.ndarray, ...],
+    def _decode(self, buf: bytes | bytearray, walked: tuple[np.ndarray, ...] | None,
                 origin_of: ContainerOrigin, out: FrameColumns) -> None:
+        """Frame columns of the plain frames and of the objects walked, in object order."""
+        pieces: list[tuple[np.ndarray, ...]] = []  # (block offset, *columns, position)
+        if self.plain is not None:
+            off, position, ts, ident, ext, length, data, channel = self.plain
+            pieces.append((off, ts, ident, ext, np.zeros(off.size, bool), length, data,
+                           channel, position))
+            self.plain = None
+        if walked is not None:
+            self._decode_objects(buf, walked, origin_of, pieces)
+        if not pieces:
+            return
+        if len(pieces) == 1:
+            out.add(pieces[0][1:])
+            return
+        seq = np.concatenate([p[0] for p in pieces])
+        order = np.argsort(seq, kind="stable")
+        width = max(p[6].shape[1] for p in pieces)
+        merged: list[np.ndarray] = []
+        for k in range(1, 9):
+            if k == 6:
+                d = np.zeros((seq.size, width), np.uint8)
+                row = 0
+                for p in pieces:
+                    d[row : row + p[6].shape[0], : p[6].shape[1]] = p[6]
+                    row += p[6].shape[0]
+                merged.append(d[order])
+            else:
+                merged.append(np.concatenate([p[k] for p in pieces])[order])
+        out.add(tuple(merged))
+
+    def _decode_objects(self, buf: bytes | bytearray, walked: tuple[np.ndarray, ...],
+                        origin_of: ContainerOrigin, pieces: list[tuple[np.ndarray, ...]]
+                        ) -> None:
+        """Report the objects walked that are no frame; append the frames' columns by type."""
         offsets, types, versions, sizes, hsizes = walked
         report = self.report
         key = types * 4 + versions
@@ -328,7 +375,6 @@ class ObjectParser:
         else:
             uniq = np.unique(key)
         a = np.frombuffer(buf, np.uint8)
-        pieces: list[tuple[np.ndarray, ...]] = []
         for kv in uniq.tolist():
             t, v = divmod(kv, 4)
             idx = None if uniq.size == 1 else np.flatnonzero(key == kv)
@@ -357,7 +403,6 @@ class ObjectParser:
                 if idx.size == 0:
                     continue
                 offs = offsets[idx]
-            seq = np.arange(offsets.size) if idx is None else idx
             rec = read_records(buf, offs, t, v)
             got = self._frame_columns(t, v, rec, a, offs, take(sizes, idx), take(hsizes, idx),
                                       origin_of)
@@ -365,28 +410,8 @@ class ObjectParser:
                 continue
             keep_rows, cols = got
             if keep_rows is not None:
-                offs, seq = offs[keep_rows], seq[keep_rows]
-            pieces.append((seq, *cols, origin_of(offs)))
-        if not pieces:
-            return
-        if len(pieces) == 1:
-            out.add(pieces[0][1:])
-            return
-        seq = np.concatenate([p[0] for p in pieces])
-        order = np.argsort(seq, kind="stable")
-        width = max(p[6].shape[1] for p in pieces)
-        merged: list[np.ndarray] = []
-        for k in range(1, 9):
-            if k == 6:
-                d = np.zeros((seq.size, width), np.uint8)
-                row = 0
-                for p in pieces:
-                    d[row : row + p[6].shape[0], : p[6].shape[1]] = p[6]
-                    row += p[6].shape[0]
-                merged.append(d[order])
-            else:
-                merged.append(np.concatenate([p[k] for p in pieces])[order])
-        out.add(tuple(merged))
+                offs = offs[keep_rows]
+            pieces.append((offs, *cols, origin_of(offs)))
 
     def _frame_columns(
         self, t: int, v: int, rec: Any, a: np.ndarray, offs: np.ndarray,
