@@ -5,7 +5,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rigtools.ingest.timebase import indices_from_stamps, timebase_check, unwrap_counter
+from rigtools.ingest.timebase import (
+    indices_from_stamps,
+    median_elements,
+    timebase_check,
+    unwrap_counter,
+)
 
 
 def test_plain_wrap_of_a_16_bit_counter():
@@ -252,3 +257,16 @@ def test_timebase_check_gives_the_numpy_median_figures_bit_for_bit(n, seed, ties
     assert t0 == want_t0
     assert stats["jitter_s"] == float(1.4826 * np.median(np.abs(resid - np.median(resid))))
     assert stats["max_abs_residual_s"] == float(np.max(np.abs(resid)))
+
+
+@given(n=st.integers(1, 3000), seed=st.integers(0, 2**32 - 1), levels=st.sampled_from([0, 3, 50]))
+@settings(max_examples=300, deadline=None)
+def test_median_elements_are_the_partition_middle(n, seed, levels):
+    """The elements ``np.partition`` puts at ranks k-1 and k (or k), ties and all."""
+    rng = np.random.default_rng(seed)
+    x = rng.normal(0, 1, n) if not levels else rng.integers(0, levels, n).astype(np.float64)
+    k = n // 2
+    want = np.partition(x, k)[k : k + 1] if n % 2 else np.partition(x, [k - 1, k])[k - 1 : k + 1]
+    got = median_elements(x)
+    assert np.array_equal(got, want)
+    assert np.mean(got) == np.median(x)

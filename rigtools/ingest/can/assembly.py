@@ -1,6 +1,7 @@
 """From streams of CAN frame batches to channels and slow signals, vectorised.
 
-Each batch is split by (identifier, extended flag) with one ``argsort``; every message the
+Each batch is split by (identifier, extended flag) in one compiled pass
+(:func:`~rigtools.ingest.can.grouping.group_by_message`); every message the
 layout uses is decoded with :func:`rigtools.ingest.can.dbc.decode_signal` over all its frames of
 the batch at once. Frames are never dropped silently: each one either contributes data or is
 counted in the :class:`~rigtools.ingest.recording.IngestReport` under a reason:
@@ -25,11 +26,11 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
-import pandas as pd
 
 from rigtools.ingest.builder import MAX_CLOCK_POINTS, RecordingBuilder
 from rigtools.ingest.can.dbc import decode_signal, multiplex_mask, signal_raw
 from rigtools.ingest.can.frames import CanFrameBatch, take_rows
+from rigtools.ingest.can.grouping import group_by_message
 from rigtools.ingest.can.layout_hint import fast_message_warning
 from rigtools.ingest.layout import CanLayout, CanUniform
 from rigtools.ingest.recording import IngestReport
@@ -78,12 +79,8 @@ def assemble_can(
         n = len(batch)
         if n == 0:
             continue
-        key_arr = batch.arbitration_id.astype(np.int64) | (batch.is_extended.astype(np.int64) << 32)
-        # Few distinct identifiers: hash them to small codes and radix-sort the codes.
-        codes, uniques = pd.factorize(key_arr)
-        order = np.argsort(codes.astype(np.int32), kind="stable")
-        counts = np.bincount(codes, minlength=len(uniques))
-        bounds = np.r_[0, np.cumsum(counts)]  # rows of code c: order[bounds[c]:bounds[c+1]]
+        # rows of message c: order[bounds[c]:bounds[c+1]], messages by first appearance
+        order, bounds, uniques = group_by_message(batch.arbitration_id, batch.is_extended)
         for code in range(len(uniques)):
             a, b = int(bounds[code]), int(bounds[code + 1])
             k = int(uniques[code])
