@@ -10,8 +10,9 @@ with the reason the container counts the chunk's messages under.
 
 from __future__ import annotations
 
-import zlib
 from typing import Any, Final
+
+import deflate
 
 __all__ = [
     "FREE_CHUNK_BYTES",
@@ -89,12 +90,15 @@ def check_chunk_size(uncompressed_bytes: int, compressed_bytes: int) -> None:
 def check_chunk_crc(data: Any, stated_crc: int) -> None:
     """Refuse decompressed chunk records whose CRC-32 is not the one the chunk states.
 
+    libdeflate's CRC-32 (the same checksum as ``zlib.crc32``, PCLMULQDQ-folded): 0.9 ms for
+    25 MB here against 17 ms for Python's zlib, which was a fifth of an MCAP read.
+
     Raises
     ------
     ChunkRefusedError
         ``chunk_crc_mismatch``.
     """
-    got = zlib.crc32(data)
+    got = deflate.crc32(data)
     if got != stated_crc:
         raise ChunkRefusedError("chunk_crc_mismatch", f"CRC-32 of the uncompressed data is "
                                 f"0x{got:08x}, the chunk states 0x{stated_crc:08x}")
