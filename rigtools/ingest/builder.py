@@ -379,6 +379,8 @@ class RecordingBuilder:
         else:
             values = np.empty(span) if complete else np.full(span, np.nan)
         valid = np.ones(span, bool) if complete else np.zeros(span, bool)
+        # every value written known finite (the compiled conversion says so on the way)
+        known_finite = adopt is None
         for bi, b in enumerate(blocks if adopt is None else []):
             bs = b.starts - first
             bskip = skip[row0[bi] : row0[bi + 1]]
@@ -388,12 +390,12 @@ class RecordingBuilder:
             if clean and (bs.shape[0] == 1 or np.all(np.diff(bs) == k)):
                 lo = int(bs[0])
                 dst = values[lo : lo + b.raw.size]
-                convert_into(b.raw.reshape(-1), conv, dst)
+                known_finite &= convert_into(b.raw.reshape(-1), conv, dst) is True
                 if not complete:
                     valid[lo : lo + b.raw.size] = True
                 continue
             conv_rows = np.empty(b.raw.shape, np.float64)
-            convert_into(b.raw, conv, conv_rows)
+            known_finite &= convert_into(b.raw, conv, conv_rows) is True
             full = bskip == 0
             if full.any():
                 pos = bs[full][:, None] + np.arange(k)
@@ -417,7 +419,8 @@ class RecordingBuilder:
         parts.blocks = []
         # One cheap reduction first: a sum over finite values is finite (an overflowing sum
         # merely falls back to the full pass).
-        if may_be_nonfinite and not (complete and np.isfinite(np.add.reduce(values))):
+        if may_be_nonfinite and not (complete and (
+                known_finite or np.isfinite(np.add.reduce(values)))):
             nonfinite = valid & ~np.isfinite(values)
             n_nonfinite = int(nonfinite.sum())
             if n_nonfinite:

@@ -23,32 +23,39 @@ _COMPILED_KINDS = frozenset("iuf")
 
 @njit(cache=True, nogil=True)
 def _convert(raw: np.ndarray, scales: np.ndarray, offsets: np.ndarray,
-             out: np.ndarray) -> None:  # pragma: no cover - compiled
+             out: np.ndarray) -> bool:  # pragma: no cover - compiled
+    finite = True
     for i in range(raw.size):
         v = np.float64(raw[i])
         for k in range(scales.size):
             v = v * scales[k]
             v = v + offsets[k]
         out[i] = v
+        if not v - v == 0.0:  # NaN or an infinity
+            finite = False
+    return finite
 
 
 def convert_into(raw: np.ndarray, conversion: tuple[tuple[float, float], ...],
-                 out: np.ndarray) -> None:
+                 out: np.ndarray) -> bool | None:
     """``out[...] = raw`` as float64, then each ``(scale, offset)`` stage applied in place.
 
     A stage ``(1.0, 0.0)`` is skipped (it would turn -0.0 into +0.0). ``out`` has the shape
     of ``raw``; NaN and infinities of float payloads pass through (a signalling NaN of a
     float32 payload becomes a quiet NaN, as in NumPy's cast).
+
+    Returns whether every value written is finite, as the compiled loop sees it on the way
+    (the builder then skips its own pass over the channel); None from the NumPy path.
     """
     stages = [(float(s), float(o)) for s, o in conversion if not (s == 1.0 and o == 0.0)]
     if (raw.dtype.kind in _COMPILED_KINDS and raw.flags.c_contiguous
             and out.flags.c_contiguous and out.dtype == np.float64 and raw.shape == out.shape):
         sc = np.array([s for s, _ in stages], np.float64)
         of = np.array([o for _, o in stages], np.float64)
-        _convert(raw.reshape(-1), sc, of, out.reshape(-1))
-        return
+        return bool(_convert(raw.reshape(-1), sc, of, out.reshape(-1)))
     with np.errstate(invalid="ignore"):  # signalling NaNs in float32 payloads stay NaN
         np.copyto(out, raw, casting="unsafe")
     for scale, offset in stages:
         np.multiply(out, scale, out=out)
         np.add(out, offset, out=out)
+    return None

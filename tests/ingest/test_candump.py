@@ -278,13 +278,17 @@ def _pycan_line_by_line(text: str) -> list[can.Message]:
 
     A payload that is not plain hex digits gives none either: python-can reads each pair
     with ``int(pair, 16)``, which takes ``+5`` or `` 5``; rigtools counts it unparsable
-    (the module docstring's "bad hex").
+    (the module docstring's "bad hex"). Nor does an odd number of payload digits: python-can
+    drops the last one (``10##0000FF`` read as FD flags 0 and the bytes ``00 0F``, found by
+    this test), rigtools and can-utils' own parser refuse the line.
     """
     out: list[can.Message] = []
     for line in text.split("\n"):  # not splitlines(): it also splits at \v, \f, \x1c...
-        payload = line.strip().split(" ")[-1].rpartition("#")[2]
-        if payload and payload[0] not in "Rr" and not all(
-                ch in "0123456789abcdefABCDEF" for ch in payload):
+        frame = line.strip().split(" ")[-1]
+        fd = "##" in frame
+        payload = frame.partition("##")[2][1:] if fd else frame.rpartition("#")[2]
+        if payload and (fd or payload[0] not in "Rr") and (len(payload) % 2 or not all(
+                ch in "0123456789abcdefABCDEF" for ch in payload)):
             continue
         try:
             out += pycan_messages(line)

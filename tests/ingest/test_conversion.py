@@ -83,3 +83,39 @@ def test_booleans_go_through_numpy():
     out = np.empty(3)
     convert_into(raw, ((2.0, 1.0),), out)
     assert out.tolist() == [3.0, 1.0, 3.0]
+
+
+@pytest.mark.parametrize(("values", "finite"), [
+    ([1.0, -2.5, 0.0], True),
+    ([1.0, np.nan], False),
+    ([np.inf, 1.0], False),
+    ([-np.inf], False),
+])
+def test_finiteness_reported_on_the_way(values, finite):
+    for dtype in (np.float32, np.float64):
+        raw = np.array(values, dtype)
+        out = np.empty(raw.shape)
+        assert convert_into(raw, (), out) is finite
+    assert convert_into(np.array([1, 2], np.int16), ((1e308, 1e308),), np.empty(2)) is False
+    assert convert_into(np.array([True]), (), np.empty(1)) is None  # the NumPy path: unknown
+
+
+def test_a_channel_with_a_non_finite_sample_is_counted_whatever_path():
+    """The builder's non-finite count with the compiled conversion's verdict and without."""
+    from rigtools.ingest import IngestReport, Provenance, RunMetadata
+    from rigtools.ingest.builder import RecordingBuilder
+
+    raw = np.arange(1000, dtype=np.float32)
+    raw[123] = np.inf
+    raw[500] = np.nan
+    # one contiguous block (compiled), rows of a strided view (NumPy), float64 (adopted)
+    for block in (raw.reshape(1, -1), raw.reshape(-1, 4)[:, ::3],
+                  raw.astype(np.float64).reshape(1, -1)):
+        report = IngestReport()
+        b = RecordingBuilder("mem", report)
+        b.add_samples("a", "g", 100.0, np.arange(block.shape[0]) * block.shape[1], block)
+        prov = Provenance("mem", "0" * 64, 0, "test", {}, report)
+        ch = b.build(RunMetadata(run_id="r"), prov).channels["a"]
+        bad = ~np.isfinite(ch.values)
+        assert report.rejected["non_finite_sample"] == int((~np.isfinite(block)).sum()) == 2
+        assert bad.sum() == 2 and not ch.valid[bad].any() and ch.valid[~bad].all()
