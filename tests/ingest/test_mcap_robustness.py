@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from rigtools.demo.mcap_writer import write_accel_mcap, write_imu_mcap
@@ -524,6 +524,53 @@ def test_json_batch_keeps_nan_tokens_and_takes_integers_as_numbers():
     assert np.isnan(got.values[2])
     big = decode_accel_batch_json(json.dumps(_batch_json(values=[1e300])).encode())
     assert big.values.tolist() == [np.inf]  # beyond float32: Inf, counted by the builder
+
+
+_JSON_SCALARS = st.one_of(
+    st.floats(allow_nan=False, allow_infinity=False), st.floats(width=32),
+    # 2**60 + 2**36 + 1: to float32 directly it rounds up, through float64 (as the schema's
+    # float64-then-float32 path does) it ties to even, down
+    st.integers(-(2**70), 2**70), st.sampled_from([2**63, 2**64 - 1, -(2**63), 2**60 + 2**36 + 1]),
+    st.text(max_size=3), st.booleans(), st.none())
+_JSON_VALUES = st.lists(st.one_of(
+    _JSON_SCALARS, st.lists(_JSON_SCALARS, max_size=2),
+    st.dictionaries(st.text(max_size=2), _JSON_SCALARS, max_size=1)), max_size=8)
+
+
+def _type_checked_values(raw: list) -> np.ndarray:
+    """The values as the schema's check reads them: every element's Python type first."""
+    if not set(map(type, raw)) <= {int, float}:
+        raise PayloadDecodeError(None, None, "values as an array of numbers", "")
+    try:
+        values = np.asarray(raw, dtype=np.float64)
+    except OverflowError:
+        raise PayloadDecodeError(None, None, "values within the float range", "") from None
+    with np.errstate(over="ignore"):
+        return values.astype(np.float32)
+
+
+@given(values=_JSON_VALUES)
+@example(values=[2**60 + 2**36 + 1])
+@example(values=[1.5, True])
+@example(values=[2.5, False, 3.5])
+@settings(max_examples=500, deadline=None)
+def test_json_values_by_numpy_discovery_equal_the_type_checked_path(values):
+    """NumPy's type discovery gives what the per-element type check gives.
+
+    The same float32 bits, or a refusal where the check refuses, on any values array:
+    numbers of every size, strings, bools, nulls, nested arrays and objects.
+    """
+    from rigtools.ingest.mcap.json import _json_values
+
+    raw = parse_json(json.dumps(values).encode(), "a JSON array")
+
+    def outcome(decode: object) -> object:
+        try:
+            return decode(raw).view(np.uint32).tolist()  # type: ignore[operator]
+        except PayloadDecodeError:
+            return "refused"
+
+    assert outcome(_json_values) == outcome(_type_checked_values)
 
 
 @pytest.mark.parametrize("rate", [0.0, -1.0, 1e-9, 1e12, float("nan"), float("inf")])
