@@ -560,17 +560,17 @@ def test_json_values_by_numpy_discovery_equal_the_type_checked_path(values):
     The same float32 bits, or a refusal where the check refuses, on any values array:
     numbers of every size, strings, bools, nulls, nested arrays and objects.
     """
-    from rigtools.ingest.mcap.json import _json_values
-
-    raw = parse_json(json.dumps(values).encode(), "a JSON array")
-
-    def outcome(decode: object) -> object:
-        try:
-            return decode(raw).view(np.uint32).tolist()  # type: ignore[operator]
-        except PayloadDecodeError:
-            return "refused"
-
-    assert outcome(_json_values) == outcome(_type_checked_values)
+    data = json.dumps(_batch_json(values=values)).encode()
+    try:
+        got: object = decode_accel_batch_json(data).values.view(np.uint32).tolist()
+    except PayloadDecodeError:
+        got = "refused"
+    try:
+        want: object = _type_checked_values(parse_json(data, "")["values"]).view(
+            np.uint32).tolist()
+    except PayloadDecodeError:
+        want = "refused"
+    assert got == want
 
 
 @pytest.mark.parametrize("rate", [0.0, -1.0, 1e-9, 1e12, float("nan"), float("inf")])
