@@ -17,8 +17,11 @@ from numba import njit
 
 __all__ = ["convert_into"]
 
-#: Raw dtypes the compiled loop takes (others, and non-contiguous arrays, go through NumPy).
-_COMPILED_KINDS = frozenset("iuf")
+#: Raw dtypes the compiled loop takes, native byte order only (numba compiles no other):
+#: others (big-endian CDR fields, float16, bools) and non-contiguous arrays go through NumPy.
+_COMPILED_DTYPES = frozenset(np.dtype(t) for t in (
+    np.int8, np.int16, np.int32, np.int64, np.uint8, np.uint16, np.uint32, np.uint64,
+    np.float32, np.float64))
 
 
 @njit(cache=True, nogil=True)
@@ -48,7 +51,7 @@ def convert_into(raw: np.ndarray, conversion: tuple[tuple[float, float], ...],
     (the builder then skips its own pass over the channel); None from the NumPy path.
     """
     stages = [(float(s), float(o)) for s, o in conversion if not (s == 1.0 and o == 0.0)]
-    if (raw.dtype.kind in _COMPILED_KINDS and raw.flags.c_contiguous
+    if (raw.dtype in _COMPILED_DTYPES and raw.flags.c_contiguous
             and out.flags.c_contiguous and out.dtype == np.float64 and raw.shape == out.shape):
         sc = np.array([s for s, _ in stages], np.float64)
         of = np.array([o for _, o in stages], np.float64)

@@ -4,7 +4,7 @@
 and pandas that took a factorisation (``pd.factorize``, a hash table), a stable ``argsort``
 of the codes and a ``bincount``: 4.8 ms for 250 000 frames of a few identifiers, a tenth of
 a mapped BLF read. One compiled loop with an open-addressing table of the keys seen and a
-counting sort does the same in two passes over the frames (about 1 ms, measured here).
+counting sort does the same in two passes over the frames (1.2-2.2 ms, measured here).
 """
 
 from __future__ import annotations
@@ -61,8 +61,9 @@ def _codes(ids: np.ndarray, ext: np.ndarray, start: int, keys: np.ndarray,
 
 
 @njit(cache=True, nogil=True)
-def _counting_sort(codes: np.ndarray, n_unique: int) -> tuple[np.ndarray, np.ndarray]:
-    # pragma: no cover - compiled
+def _counting_sort(codes: np.ndarray,
+                   n_unique: int) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
+    """Stable order of the rows by code, and where each code's rows begin."""
     bounds = np.zeros(n_unique + 1, np.int64)
     for c in codes:
         bounds[c + 1] += 1
@@ -78,8 +79,9 @@ def _counting_sort(codes: np.ndarray, n_unique: int) -> tuple[np.ndarray, np.nda
 
 
 @njit(cache=True, nogil=True)
-def _rehash(uniques: np.ndarray, n_unique: int, bits: int) -> tuple[np.ndarray, np.ndarray]:
-    # pragma: no cover - compiled
+def _rehash(uniques: np.ndarray, n_unique: int,
+            bits: int) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover
+    """A table of ``2**bits`` slots holding the first ``n_unique`` keys, and their codes."""
     keys = np.full(1 << bits, _EMPTY)
     codes_of = np.empty(1 << bits, np.int64)
     for c in range(n_unique):
